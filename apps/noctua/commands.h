@@ -1,0 +1,10 @@
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+// Each subcommand lives in its own cmd_<name>.cc and registers itself on the top-level app.
+// A command's action throws noctua::Error for bad input; main() turns it into a one-line reason
+// and a non-zero exit code.
+namespace noctua::app {
+
+}  // namespace noctua::app

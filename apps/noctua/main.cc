@@ -1,0 +1,33 @@
+#include <exception>
+#include <iostream>
+
+#include <CLI/CLI.hpp>
+#include <spdlog/spdlog.h>
+
+#include "commands.h"
+#include "noctua/util/error.h"
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "noctua: feature points for visual SLAM that survive low light and moving people"};
+  app.require_subcommand(1);
+  bool verbose = false;
+  app.add_flag("-v,--verbose", verbose, "Log debugging detail");
+  app.parse_complete_callback([&] {
+    spdlog::set_level(verbose ? spdlog::level::debug : spdlog::level::info);
+  });
+  spdlog::set_pattern("[%l] %v");
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& error) {
+    return app.exit(error);
+  } catch (const noctua::Error& error) {
+    std::cerr << "noctua: error: " << error.what() << "\n";
+    return 1;
+  } catch (const std::exception& error) {
+    std::cerr << "noctua: internal error: " << error.what() << "\n";
+    return 2;
+  }
+  return 0;
+}

@@ -1,0 +1,51 @@
+#pragma once
+
+#include <string>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+
+namespace noctua::image {
+
+enum class EnhancementMethod {
+  kNone,
+  kHistogramEqualization,  // global histogram equalisation (HE-ORB)
+  kClahe,                  // contrast-limited adaptive histogram equalisation (the paper)
+};
+
+// Parses "none", "he", "clahe"; throws noctua::Error on anything else.
+EnhancementMethod ParseEnhancementMethod(const std::string& name);
+std::string ToString(EnhancementMethod method);
+
+struct EnhancementOptions {
+  EnhancementMethod method = EnhancementMethod::kClahe;
+  // Defaults chosen by measurement (docs/enhancement.md): clip 3 with 8x8 tiles lifts real
+  // low-light photos (mean grey 6-25) to a usable contrast without the noise bloom of higher
+  // clips, and leaves normally lit TUM frames nearly unchanged in feature count.
+  double clahe_clip_limit = 3.0;
+  int clahe_tiles_x = 8;
+  int clahe_tiles_y = 8;
+
+  // Throws noctua::Error naming the first invalid field.
+  void Check() const;
+};
+
+// Converts an 8-bit image with 1, 3 (BGR) or 4 (BGRA) channels to grey. Throws noctua::Error for
+// empty images and for any other depth or channel count: callers convert 16-bit or float data
+// themselves, because no single scaling is right for all of them.
+cv::Mat ToGray8U(const cv::Mat& image);
+
+// Applies one enhancement to 8-bit grey images. Holds the CLAHE object so repeated frames reuse it.
+class Enhancer {
+ public:
+  explicit Enhancer(const EnhancementOptions& options);
+  // Returns the enhanced grey image (the input itself, shared, for kNone).
+  cv::Mat Apply(const cv::Mat& gray) const;
+  const EnhancementOptions& options() const { return options_; }
+
+ private:
+  EnhancementOptions options_;
+  cv::Ptr<cv::CLAHE> clahe_;
+};
+
+}  // namespace noctua::image
