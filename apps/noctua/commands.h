@@ -7,4 +7,7 @@
 // and a non-zero exit code.
 namespace noctua::app {
 
+// Each Add*Command adds one subcommand (with its --help) and binds its action.
+// Keep this list in the order of `noctua --help`.
+
 }  // namespace noctua::app

@@ -17,6 +17,7 @@ int main(int argc, char** argv) {
     spdlog::set_level(verbose ? spdlog::level::debug : spdlog::level::info);
   });
   spdlog::set_pattern("[%l] %v");
+  // Subcommands (one Add*Command per cmd_<name>.cc, declared in commands.h):
 
   try {
     app.parse(argc, argv);

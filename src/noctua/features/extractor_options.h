@@ -1,0 +1,58 @@
+#pragma once
+
+#include <string>
+
+#include "noctua/image/enhancement.h"
+
+namespace noctua::features {
+
+// oFAST on an image pyramid with ORB-SLAM's semantics and defaults.
+struct PyramidFastOptions {
+  int num_features = 1000;     // ORBextractor.nFeatures: points kept over all levels
+  double scale_factor = 1.2;   // ORBextractor.scaleFactor: scale between pyramid levels
+  int num_levels = 8;          // ORBextractor.nLevels
+  int initial_fast_threshold = 20;  // ORBextractor.iniThFAST: first try in each grid cell
+  int min_fast_threshold = 7;       // ORBextractor.minThFAST: fallback when a cell is empty
+  int cell_size = 30;               // grid cell side in pixels of each level
+
+  void Check() const;
+};
+
+// Filter (a): points inside the dynamic mask (non-zero pixels) are dropped.
+struct DynamicFilterOptions {
+  bool enabled = true;
+  void Check() const {}
+};
+
+// Filter (b): only points within `radius_px` of an edge pixel survive. The radius is in pixels
+// of the point's own pyramid level, so coarse levels (whose points are localised less finely)
+// get a proportionally wider band in the full-resolution edge map.
+struct EdgeFilterOptions {
+  bool enabled = true;
+  double radius_px = 2.0;
+  void Check() const;
+};
+
+// Filter (c): in every `window` x `window` neighbourhood of a pyramid level only the point with
+// the strongest FAST response survives (the paper uses 3).
+struct NmsFilterOptions {
+  bool enabled = true;
+  int window = 3;
+  void Check() const;
+};
+
+// Everything the extractor does, stage by stage. Switching stages off gives the baselines:
+// ORB (no enhancement, no filters), HE-ORB, CLAHE-ORB, and the paper's method (all on).
+struct ExtractorOptions {
+  image::EnhancementOptions enhancement;
+  PyramidFastOptions fast;
+  DynamicFilterOptions dynamic_filter;
+  EdgeFilterOptions edge_filter;
+  NmsFilterOptions nms_filter;
+  bool compute_descriptors = true;  // false: keypoints only (the FAST baseline)
+
+  // Throws noctua::Error naming the first invalid field.
+  void Check() const;
+};
+
+}  // namespace noctua::features
