@@ -1,8 +1,7 @@
 #include "noctua/io/image_file.h"
 
-#include <string>
-
 #include <opencv2/imgcodecs.hpp>
+#include <string>
 
 #include "noctua/util/error.h"
 
@@ -11,14 +10,22 @@ namespace {
 
 std::string DepthName(int depth) {
   switch (depth) {
-    case CV_8U: return "8-bit";
-    case CV_8S: return "signed 8-bit";
-    case CV_16U: return "16-bit";
-    case CV_16S: return "signed 16-bit";
-    case CV_32S: return "32-bit integer";
-    case CV_32F: return "32-bit float";
-    case CV_64F: return "64-bit float";
-    default: return "unknown-depth";
+    case CV_8U:
+      return "8-bit";
+    case CV_8S:
+      return "signed 8-bit";
+    case CV_16U:
+      return "16-bit";
+    case CV_16S:
+      return "signed 16-bit";
+    case CV_32S:
+      return "32-bit integer";
+    case CV_32F:
+      return "32-bit float";
+    case CV_64F:
+      return "64-bit float";
+    default:
+      return "unknown-depth";
   }
 }
 
@@ -27,7 +34,8 @@ cv::Mat ReadUnchanged(const std::filesystem::path& path) {
   if (!std::filesystem::exists(path, error)) ThrowFileError(path, "no such file");
   if (std::filesystem::is_directory(path, error)) ThrowFileError(path, "is a folder, not an image");
   cv::Mat image = cv::imread(path.string(), cv::IMREAD_UNCHANGED);
-  if (image.empty()) ThrowFileError(path, "cannot decode the image (corrupt, truncated or not an image)");
+  if (image.empty())
+    ThrowFileError(path, "cannot decode the image (corrupt, truncated or not an image)");
   return image;
 }
 

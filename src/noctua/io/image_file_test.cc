@@ -1,9 +1,9 @@
 #include "noctua/io/image_file.h"
 
-#include <fstream>
-
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+
+#include <fstream>
 #include <opencv2/imgcodecs.hpp>
 
 #include "noctua/testing/shared_data.h"
