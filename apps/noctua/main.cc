@@ -1,21 +1,19 @@
-#include <exception>
-#include <iostream>
+#include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
-#include <spdlog/spdlog.h>
+#include <exception>
+#include <iostream>
 
 #include "commands.h"
 #include "noctua/util/error.h"
 
 int main(int argc, char** argv) {
-  CLI::App app{
-      "noctua: feature points for visual SLAM that survive low light and moving people"};
+  CLI::App app{"noctua: feature points for visual SLAM that survive low light and moving people"};
   app.require_subcommand(1);
   bool verbose = false;
   app.add_flag("-v,--verbose", verbose, "Log debugging detail");
-  app.parse_complete_callback([&] {
-    spdlog::set_level(verbose ? spdlog::level::debug : spdlog::level::info);
-  });
+  app.parse_complete_callback(
+      [&] { spdlog::set_level(verbose ? spdlog::level::debug : spdlog::level::info); });
   spdlog::set_pattern("[%l] %v");
   // Subcommands (one Add*Command per cmd_<name>.cc, declared in commands.h):
 

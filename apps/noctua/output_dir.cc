@@ -9,7 +9,8 @@ namespace noctua::app {
 void PrepareOutputDir(const std::filesystem::path& dir, bool force) {
   std::error_code error;
   if (std::filesystem::exists(dir, error)) {
-    if (!std::filesystem::is_directory(dir, error)) ThrowFileError(dir, "exists and is not a folder");
+    if (!std::filesystem::is_directory(dir, error))
+      ThrowFileError(dir, "exists and is not a folder");
     if (!std::filesystem::is_empty(dir, error) && !force) {
       ThrowFileError(dir, "output folder exists and is not empty (use --force to write into it)");
     }

@@ -2,15 +2,17 @@
 
 #include <functional>
 #include <map>
+#include <memory>
+#include <opencv2/features2d.hpp>
 #include <string>
 #include <vector>
-
-#include <opencv2/features2d.hpp>
 
 #include "noctua/features/extractor_options.h"
 #include "noctua/image/enhancement.h"
 
 namespace noctua::features {
+
+class RbriefDescriber;
 
 // Produces a CV_8U map the size of the frame, non-zero on edge pixels, from the enhanced grey
 // frame (phase congruency for the paper's method).
@@ -23,12 +25,12 @@ using DynamicMaskSource = std::function<cv::Mat(const cv::Mat& image)>;
 // What happened to one frame: how many points each stage left, which stages ran, and how long
 // each took (milliseconds).
 struct ExtractionStats {
-  int detected = 0;         // oFAST candidates over all levels, before any filter
-  int after_mask = 0;       // after the caller's Feature2D mask (zero pixels exclude)
-  int after_dynamic = 0;    // after filter (a)
-  int after_edge = 0;       // after filter (b)
-  int after_nms = 0;        // after filter (c)
-  int final_count = 0;      // after distribution over the image to num_features
+  int detected = 0;       // oFAST candidates over all levels, before any filter
+  int after_mask = 0;     // after the caller's Feature2D mask (zero pixels exclude)
+  int after_dynamic = 0;  // after filter (a)
+  int after_edge = 0;     // after filter (b)
+  int after_nms = 0;      // after filter (c)
+  int final_count = 0;    // after distribution over the image to num_features
   std::vector<std::string> stages_ran;
   std::vector<std::string> stages_skipped;  // "edge-filter (no edge map source)", ...
   std::map<std::string, double> stage_ms;
@@ -62,7 +64,8 @@ class Extractor : public cv::Feature2D {
   Extraction Extract(const cv::Mat& image, const cv::Mat& dynamic_mask = cv::Mat(),
                      const cv::Mat& edge_map = cv::Mat()) const;
 
-  // cv::Feature2D. With useProvidedKeypoints, only descriptors are computed for the given points.
+  // cv::Feature2D. With useProvidedKeypoints, only descriptors are computed for the given points
+  // (those where a given mask is zero are removed first, like any other detection).
   void detectAndCompute(cv::InputArray image, cv::InputArray mask,
                         std::vector<cv::KeyPoint>& keypoints, cv::OutputArray descriptors,
                         bool useProvidedKeypoints = false) override;
@@ -81,7 +84,7 @@ class Extractor : public cv::Feature2D {
 
   ExtractorOptions options_;
   image::Enhancer enhancer_;
-  cv::Ptr<cv::ORB> descriptor_engine_;
+  std::shared_ptr<const RbriefDescriber> descriptor_engine_;  // null without descriptors
   EdgeMapSource edge_source_;
   DynamicMaskSource dynamic_source_;
   ExtractionStats last_stats_;

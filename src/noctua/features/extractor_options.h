@@ -8,9 +8,9 @@ namespace noctua::features {
 
 // oFAST on an image pyramid with ORB-SLAM's semantics and defaults.
 struct PyramidFastOptions {
-  int num_features = 1000;     // ORBextractor.nFeatures: points kept over all levels
-  double scale_factor = 1.2;   // ORBextractor.scaleFactor: scale between pyramid levels
-  int num_levels = 8;          // ORBextractor.nLevels
+  int num_features = 1000;          // ORBextractor.nFeatures: points kept over all levels
+  double scale_factor = 1.2;        // ORBextractor.scaleFactor: scale between pyramid levels
+  int num_levels = 8;               // ORBextractor.nLevels
   int initial_fast_threshold = 20;  // ORBextractor.iniThFAST: first try in each grid cell
   int min_fast_threshold = 7;       // ORBextractor.minThFAST: fallback when a cell is empty
   int cell_size = 30;               // grid cell side in pixels of each level

@@ -13,17 +13,22 @@ EnhancementMethod ParseEnhancementMethod(const std::string& name) {
 
 std::string ToString(EnhancementMethod method) {
   switch (method) {
-    case EnhancementMethod::kNone: return "none";
-    case EnhancementMethod::kHistogramEqualization: return "he";
-    case EnhancementMethod::kClahe: return "clahe";
+    case EnhancementMethod::kNone:
+      return "none";
+    case EnhancementMethod::kHistogramEqualization:
+      return "he";
+    case EnhancementMethod::kClahe:
+      return "clahe";
   }
   return "unknown";
 }
 
 void EnhancementOptions::Check() const {
   CheckOption(clahe_clip_limit > 0.0, "enhancement.clahe_clip_limit must be > 0");
-  CheckOption(clahe_tiles_x >= 1 && clahe_tiles_x <= 64, "enhancement.clahe_tiles_x must be in [1, 64]");
-  CheckOption(clahe_tiles_y >= 1 && clahe_tiles_y <= 64, "enhancement.clahe_tiles_y must be in [1, 64]");
+  CheckOption(clahe_tiles_x >= 1 && clahe_tiles_x <= 64,
+              "enhancement.clahe_tiles_x must be in [1, 64]");
+  CheckOption(clahe_tiles_y >= 1 && clahe_tiles_y <= 64,
+              "enhancement.clahe_tiles_y must be in [1, 64]");
 }
 
 cv::Mat ToGray8U(const cv::Mat& image) {
@@ -34,9 +39,14 @@ cv::Mat ToGray8U(const cv::Mat& image) {
   }
   cv::Mat gray;
   switch (image.channels()) {
-    case 1: return image;
-    case 3: cv::cvtColor(image, gray, cv::COLOR_BGR2GRAY); return gray;
-    case 4: cv::cvtColor(image, gray, cv::COLOR_BGRA2GRAY); return gray;
+    case 1:
+      return image;
+    case 3:
+      cv::cvtColor(image, gray, cv::COLOR_BGR2GRAY);
+      return gray;
+    case 4:
+      cv::cvtColor(image, gray, cv::COLOR_BGRA2GRAY);
+      return gray;
     default:
       throw Error("expected 1, 3 or 4 channels, got " + std::to_string(image.channels()));
   }
@@ -54,9 +64,14 @@ cv::Mat Enhancer::Apply(const cv::Mat& gray) const {
   CV_Assert(gray.type() == CV_8UC1);
   cv::Mat enhanced;
   switch (options_.method) {
-    case EnhancementMethod::kNone: return gray;
-    case EnhancementMethod::kHistogramEqualization: cv::equalizeHist(gray, enhanced); break;
-    case EnhancementMethod::kClahe: clahe_->apply(gray, enhanced); break;
+    case EnhancementMethod::kNone:
+      return gray;
+    case EnhancementMethod::kHistogramEqualization:
+      cv::equalizeHist(gray, enhanced);
+      break;
+    case EnhancementMethod::kClahe:
+      clahe_->apply(gray, enhanced);
+      break;
   }
   return enhanced;
 }

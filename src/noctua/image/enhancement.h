@@ -1,9 +1,8 @@
 #pragma once
 
-#include <string>
-
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
+#include <string>
 
 namespace noctua::image {
 

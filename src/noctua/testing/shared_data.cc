@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cstdlib>
-
 #include <opencv2/imgcodecs.hpp>
 
 #include "noctua/util/error.h"
@@ -24,7 +23,8 @@ std::filesystem::path ModelsDir() { return SharedDir() / "models"; }
 
 std::vector<std::filesystem::path> Fr1RgbPaths(int count) {
   std::vector<std::filesystem::path> paths;
-  for (const auto& entry : std::filesystem::directory_iterator(DataDir() / "tum_fr1_rpy_200" / "rgb")) {
+  for (const auto& entry :
+       std::filesystem::directory_iterator(DataDir() / "tum_fr1_rpy_200" / "rgb")) {
     paths.push_back(entry.path());
   }
   std::sort(paths.begin(), paths.end());

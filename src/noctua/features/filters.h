@@ -1,0 +1,33 @@
+#pragma once
+
+#include <opencv2/core.hpp>
+#include <opencv2/features2d.hpp>
+#include <vector>
+
+namespace noctua::features {
+
+// The paper's three filters. Points are in the pixel coordinates of their pyramid level
+// (`octave`); `scale` converts a level's coordinates to level 0, where masks and edge maps live.
+
+// Position of a level point in level-0 pixels, clamped into a map of `size`.
+cv::Point ToLevelZeroPixel(const cv::KeyPoint& point, double scale, const cv::Size& size);
+
+// Removes points whose level-0 pixel in `mask` (CV_8U, level-0 size) is non-zero when
+// `drop_where_set`, or zero otherwise (OpenCV's Feature2D mask convention). Returns how many
+// points remain.
+void FilterByMask(std::vector<cv::KeyPoint>& points, double scale, const cv::Mat& mask,
+                  bool drop_where_set);
+
+// Distance (level-0 pixels, CV_32F) from every pixel to the nearest non-zero pixel of a CV_8U
+// edge map. Computed once per frame and shared by all levels.
+cv::Mat DistanceToEdges(const cv::Mat& edge_map);
+
+// Keeps points within `radius_px` (pixels of their own level) of an edge.
+void FilterByEdgeDistance(std::vector<cv::KeyPoint>& points, double scale,
+                          const cv::Mat& distance_to_edges, double radius_px);
+
+// Keeps, within every window x window neighbourhood of one level, only the point with the highest
+// response (ties: the first one seen). Points must all belong to one level of size `level_size`.
+void SuppressNonMaxima(std::vector<cv::KeyPoint>& points, const cv::Size& level_size, int window);
+
+}  // namespace noctua::features

@@ -1,0 +1,224 @@
+#include "noctua/features/ofast.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+#include <queue>
+
+namespace noctua::features {
+
+std::vector<int> FeaturesPerLevel(const PyramidFastOptions& options, int num_levels) {
+  std::vector<int> wanted(static_cast<std::size_t>(num_levels), 0);
+  const double factor = 1.0 / options.scale_factor;
+  double per_level = options.num_features * (1.0 - factor) /
+                     (1.0 - std::pow(factor, static_cast<double>(num_levels)));
+  int assigned = 0;
+  for (int l = 0; l + 1 < num_levels; ++l) {
+    wanted[static_cast<std::size_t>(l)] = static_cast<int>(std::lround(per_level));
+    assigned += wanted[static_cast<std::size_t>(l)];
+    per_level *= factor;
+  }
+  wanted.back() = std::max(options.num_features - assigned, 0);
+  return wanted;
+}
+
+std::vector<cv::KeyPoint> DetectGridFast(const cv::Mat& level_image, int level,
+                                         const PyramidFastOptions& options) {
+  // FAST keeps 3 pixels of its input as border; the search area is widened by that much so that
+  // corners land exactly in [kEdgeThreshold, size - kEdgeThreshold).
+  constexpr int kFastBorder = 3;
+  const cv::Rect search(kEdgeThreshold - kFastBorder, kEdgeThreshold - kFastBorder,
+                        level_image.cols - 2 * (kEdgeThreshold - kFastBorder),
+                        level_image.rows - 2 * (kEdgeThreshold - kFastBorder));
+  std::vector<cv::KeyPoint> corners;
+  if (search.width <= 2 * kFastBorder || search.height <= 2 * kFastBorder) return corners;
+
+  cv::FAST(level_image(search), corners, options.initial_fast_threshold, true);
+  for (auto& corner : corners) corner.pt += cv::Point2f(search.tl());
+
+  // Cells over the area where corners can lie.
+  const cv::Rect inner(kEdgeThreshold, kEdgeThreshold, search.width - 2 * kFastBorder,
+                       search.height - 2 * kFastBorder);
+  const int cells_x = std::max(1, inner.width / options.cell_size);
+  const int cells_y = std::max(1, inner.height / options.cell_size);
+  const float cell_w = static_cast<float>(inner.width) / static_cast<float>(cells_x);
+  const float cell_h = static_cast<float>(inner.height) / static_cast<float>(cells_y);
+  auto cell_of = [&](const cv::Point2f& pt) {
+    const int cx = std::min(cells_x - 1, static_cast<int>((pt.x - inner.x) / cell_w));
+    const int cy = std::min(cells_y - 1, static_cast<int>((pt.y - inner.y) / cell_h));
+    return cy * cells_x + cx;
+  };
+  std::vector<int> count(static_cast<std::size_t>(cells_x * cells_y), 0);
+  for (const auto& corner : corners) ++count[static_cast<std::size_t>(cell_of(corner.pt))];
+
+  std::vector<cv::KeyPoint> fallback;
+  for (int cy = 0; cy < cells_y; ++cy) {
+    for (int cx = 0; cx < cells_x; ++cx) {
+      if (count[static_cast<std::size_t>(cy * cells_x + cx)] > 0) continue;
+      const int x0 = inner.x + static_cast<int>(std::floor(cx * cell_w));
+      const int y0 = inner.y + static_cast<int>(std::floor(cy * cell_h));
+      const int x1 = inner.x + static_cast<int>(std::floor((cx + 1) * cell_w));
+      const int y1 = inner.y + static_cast<int>(std::floor((cy + 1) * cell_h));
+      const cv::Rect cell_search(x0 - kFastBorder, y0 - kFastBorder, x1 - x0 + 2 * kFastBorder,
+                                 y1 - y0 + 2 * kFastBorder);
+      cv::FAST(level_image(cell_search & search), fallback, options.min_fast_threshold, true);
+      const cv::Point2f offset((cell_search & search).tl());
+      for (auto& corner : fallback) {
+        corner.pt += offset;
+        // Keep only corners of this cell: the widened search overlaps the neighbours.
+        if (corner.pt.x >= x0 && corner.pt.x < x1 && corner.pt.y >= y0 && corner.pt.y < y1) {
+          corners.push_back(corner);
+        }
+      }
+    }
+  }
+  for (auto& corner : corners) {
+    corner.octave = level;
+    corner.size = static_cast<float>(kPatchSize);
+  }
+  return corners;
+}
+
+namespace {
+
+struct Region {
+  cv::Rect2f bounds;
+  std::vector<int> members;
+};
+
+}  // namespace
+
+std::vector<cv::KeyPoint> DistributeOverImage(const std::vector<cv::KeyPoint>& points,
+                                              const cv::Rect2f& bounds, int target) {
+  if (static_cast<int>(points.size()) <= target) return points;
+  if (target <= 0) return {};
+
+  // Start, as ORB-SLAM does, with roughly square regions side by side.
+  const int initial = std::max(1, static_cast<int>(std::lround(bounds.width / bounds.height)));
+  const float strip = bounds.width / static_cast<float>(initial);
+  std::vector<Region> regions(static_cast<std::size_t>(initial));
+  for (int i = 0; i < initial; ++i) {
+    regions[static_cast<std::size_t>(i)].bounds =
+        cv::Rect2f(bounds.x + strip * static_cast<float>(i), bounds.y, strip, bounds.height);
+  }
+  for (int i = 0; i < static_cast<int>(points.size()); ++i) {
+    const float x = points[static_cast<std::size_t>(i)].pt.x;
+    const int index = std::clamp(static_cast<int>((x - bounds.x) / strip), 0, initial - 1);
+    regions[static_cast<std::size_t>(index)].members.push_back(i);
+  }
+  std::erase_if(regions, [](const Region& region) { return region.members.empty(); });
+
+  // As ORB-SLAM's octree: each round splits every region holding more than one point, so sparse
+  // parts of the image are refined as often as crowded ones; the round that would overshoot the
+  // target splits the most crowded regions first and stops on reaching it.
+  auto split = [&](Region parent, std::vector<Region>& into) {
+    const float half_w = parent.bounds.width / 2.0f;
+    const float half_h = parent.bounds.height / 2.0f;
+    std::array<Region, 4> children;
+    for (int c = 0; c < 4; ++c) {
+      children[static_cast<std::size_t>(c)].bounds =
+          cv::Rect2f(parent.bounds.x + half_w * static_cast<float>(c % 2),
+                     parent.bounds.y + half_h * static_cast<float>(c / 2), half_w, half_h);
+    }
+    for (const int member : parent.members) {
+      const cv::Point2f& pt = points[static_cast<std::size_t>(member)].pt;
+      const int c =
+          (pt.x >= parent.bounds.x + half_w ? 1 : 0) + (pt.y >= parent.bounds.y + half_h ? 2 : 0);
+      children[static_cast<std::size_t>(c)].members.push_back(member);
+    }
+    for (auto& child : children) {
+      if (!child.members.empty()) into.push_back(std::move(child));
+    }
+  };
+  auto splittable = [](const Region& region) {
+    return region.members.size() > 1 && region.bounds.width >= 1.0f && region.bounds.height >= 1.0f;
+  };
+  while (static_cast<int>(regions.size()) < target) {
+    std::vector<Region> settled;
+    std::vector<Region> to_split;
+    for (auto& region : regions) {
+      (splittable(region) ? to_split : settled).push_back(std::move(region));
+    }
+    if (to_split.empty()) {
+      regions = std::move(settled);
+      break;
+    }
+    const bool last_round = static_cast<int>(settled.size() + 4 * to_split.size()) >= target;
+    if (last_round) {
+      std::stable_sort(to_split.begin(), to_split.end(), [](const Region& a, const Region& b) {
+        return a.members.size() > b.members.size();
+      });
+    }
+    std::vector<Region> next = std::move(settled);
+    for (std::size_t i = 0; i < to_split.size(); ++i) {
+      const std::size_t unsplit_left = to_split.size() - i;
+      if (last_round && static_cast<int>(next.size() + unsplit_left) >= target) {
+        for (std::size_t j = i; j < to_split.size(); ++j) next.push_back(std::move(to_split[j]));
+        break;
+      }
+      split(std::move(to_split[i]), next);
+    }
+    const bool stalled = next.size() == regions.size();
+    regions = std::move(next);
+    if (stalled) break;
+  }
+  const std::size_t live = regions.size();
+
+  std::vector<cv::KeyPoint> kept;
+  kept.reserve(live);
+  for (const auto& region : regions) {
+    if (region.members.empty()) continue;
+    const int best =
+        *std::max_element(region.members.begin(), region.members.end(), [&](int a, int b) {
+          return points[static_cast<std::size_t>(a)].response <
+                 points[static_cast<std::size_t>(b)].response;
+        });
+    kept.push_back(points[static_cast<std::size_t>(best)]);
+  }
+  // Splitting into four can overshoot the target by up to three; drop the weakest.
+  if (static_cast<int>(kept.size()) > target) {
+    std::nth_element(
+        kept.begin(), kept.begin() + target, kept.end(),
+        [](const cv::KeyPoint& a, const cv::KeyPoint& b) { return a.response > b.response; });
+    kept.resize(static_cast<std::size_t>(target));
+  }
+  return kept;
+}
+
+void ComputeOrientation(const cv::Mat& level_image, std::vector<cv::KeyPoint>& points) {
+  // Half-widths of the disc u^2 + v^2 <= r^2 + r, row by row; the disc is symmetric under
+  // exchanging u and v, so the angle turns exactly with the image.
+  static const std::vector<int> kHalfWidth = [] {
+    std::vector<int> half_width(kHalfPatchSize + 1);
+    const int limit = kHalfPatchSize * kHalfPatchSize + kHalfPatchSize;
+    for (int v = 0; v <= kHalfPatchSize; ++v) {
+      int u = 0;
+      while ((u + 1) * (u + 1) + v * v <= limit) ++u;
+      half_width[static_cast<std::size_t>(v)] = u;
+    }
+    return half_width;
+  }();
+  const int step = static_cast<int>(level_image.step1());
+  for (auto& point : points) {
+    const uchar* center = &level_image.at<uchar>(cvRound(point.pt.y), cvRound(point.pt.x));
+    int m01 = 0;
+    int m10 = 0;
+    const int middle = kHalfWidth[0];
+    for (int u = -middle; u <= middle; ++u) m10 += u * center[u];
+    for (int v = 1; v <= kHalfPatchSize; ++v) {
+      int v_sum = 0;
+      const int d = kHalfWidth[static_cast<std::size_t>(v)];
+      for (int u = -d; u <= d; ++u) {
+        const int below = center[u + v * step];
+        const int above = center[u - v * step];
+        v_sum += below - above;
+        m10 += u * (below + above);
+      }
+      m01 += v * v_sum;
+    }
+    point.angle = cv::fastAtan2(static_cast<float>(m01), static_cast<float>(m10));
+  }
+}
+
+}  // namespace noctua::features

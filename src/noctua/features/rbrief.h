@@ -1,0 +1,27 @@
+#pragma once
+
+#include <opencv2/features2d.hpp>
+#include <vector>
+
+#include "noctua/features/extractor_options.h"
+
+namespace noctua::features {
+
+// rBRIEF descriptors (256 bits, 32 bytes, steered by the keypoint angle, sampled on the Gaussian-
+// blurred pyramid level) computed by OpenCV's ORB on our keypoints. Using OpenCV's own code keeps
+// the learned sampling pattern, the blur and the steering exactly ORB's, so our descriptors can be
+// matched against any ORB descriptor.
+class RbriefDescriber {
+ public:
+  explicit RbriefDescriber(const PyramidFastOptions& options);
+
+  // Keypoints in ORB-SLAM semantics (level-0 coordinates, octave, angle). Points too close to the
+  // border for a descriptor are removed and the rest are reordered by level, as OpenCV does.
+  void Compute(const cv::Mat& gray, std::vector<cv::KeyPoint>& keypoints,
+               cv::Mat& descriptors) const;
+
+ private:
+  cv::Ptr<cv::ORB> orb_;
+};
+
+}  // namespace noctua::features
