@@ -1,0 +1,62 @@
+#pragma once
+
+#include <memory>
+#include <opencv2/features2d.hpp>
+#include <string>
+#include <vector>
+
+#include "noctua/features/extractor.h"
+#include "noctua/features/extractor_options.h"
+
+namespace noctua::pipeline {
+
+// Settings shared by every method; each method takes what applies to it (the ORB-SLAM keys apply
+// to all pyramid methods, the paper's stages only to `paper`).
+struct MethodConfig {
+  features::ExtractorOptions extractor;  // base options, e.g. from a settings file
+  std::string detector_model;            // ONNX model for the paper's dynamic regions ("" = none)
+
+  void Check() const { extractor.Check(); }
+};
+
+// One feature method (ours or a baseline) behind one interface, so evaluation, SLAM and the
+// command line treat them alike.
+class FeatureMethod {
+ public:
+  virtual ~FeatureMethod() = default;
+
+  const std::string& name() const { return name_; }
+
+  // Keypoints, descriptors and per-stage statistics of one 8-bit frame. `exclusion_mask`
+  // (optional, CV_8U, the frame's size) marks pixels where no point may lie; every method honours
+  // it (the paper's method counts it as its dynamic mask). Throws noctua::Error for bad input.
+  virtual features::Extraction Run(const cv::Mat& image,
+                                   const cv::Mat& exclusion_mask = cv::Mat()) = 0;
+
+  // cv::NORM_HAMMING for binary descriptors, cv::NORM_L2 for float ones.
+  virtual int norm_type() const = 0;
+
+  // The method as a plain cv::Feature2D, for code that wants OpenCV's interface.
+  virtual cv::Ptr<cv::Feature2D> feature2d() const = 0;
+
+ protected:
+  explicit FeatureMethod(std::string name) : name_(std::move(name)) {}
+
+ private:
+  std::string name_;
+};
+
+// Every method name CreateMethod accepts, in the order tables list them.
+std::vector<std::string> MethodNames();
+
+// The extractor options a method of ours uses: `base` with the method's stages switched on or off
+// (orb: none; he-orb: HE; clahe-orb: CLAHE; paper: CLAHE and the three filters). Throws
+// noctua::Error for a name that is not one of our extractor's methods.
+features::ExtractorOptions OptionsForMethod(const std::string& name,
+                                            const features::ExtractorOptions& base);
+
+// Creates a method by name (see MethodNames). Throws noctua::Error naming the unknown method and
+// listing the known ones.
+std::unique_ptr<FeatureMethod> CreateMethod(const std::string& name, const MethodConfig& config);
+
+}  // namespace noctua::pipeline

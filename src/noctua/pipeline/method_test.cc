@@ -1,0 +1,79 @@
+#include "noctua/pipeline/method.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "noctua/testing/shared_data.h"
+#include "noctua/util/error.h"
+
+namespace noctua::pipeline {
+namespace {
+
+using ::testing::HasSubstr;
+
+class MethodTest : public ::testing::TestWithParam<std::string> {
+ protected:
+  static void SetUpTestSuite() {
+    frame_ =
+        noctua::testing::ReadImageOrThrow(noctua::testing::Fr1RgbPaths(1)[0], cv::IMREAD_COLOR);
+  }
+  static cv::Mat frame_;
+};
+cv::Mat MethodTest::frame_;
+
+TEST_P(MethodTest, RunsOnARealFrameAndHonoursTheExclusionMask) {
+  auto method = CreateMethod(GetParam(), MethodConfig{});
+  EXPECT_EQ(method->name(), GetParam());
+  const auto all = method->Run(frame_);
+  ASSERT_GT(all.keypoints.size(), 100u);
+  EXPECT_EQ(all.descriptors.rows, static_cast<int>(all.keypoints.size()));
+  EXPECT_EQ(all.stats.final_count, static_cast<int>(all.keypoints.size()));
+  EXPECT_EQ(method->norm_type(), cv::NORM_HAMMING);
+  EXPECT_FALSE(method->feature2d().empty());
+
+  cv::Mat exclusion(frame_.size(), CV_8UC1, cv::Scalar(0));
+  const cv::Rect excluded(0, 0, frame_.cols / 2, frame_.rows);
+  exclusion(excluded).setTo(255);
+  const auto masked = method->Run(frame_, exclusion);
+  ASSERT_GT(masked.keypoints.size(), 20u);
+  for (const auto& point : masked.keypoints) {
+    EXPECT_FALSE(excluded.contains(cv::Point(cvRound(point.pt.x), cvRound(point.pt.y))))
+        << point.pt;
+  }
+  EXPECT_THROW(method->Run(frame_, cv::Mat(10, 10, CV_8UC1, cv::Scalar(0))), Error);
+}
+
+INSTANTIATE_TEST_SUITE_P(AllMethods, MethodTest, ::testing::ValuesIn(MethodNames()),
+                         [](const auto& param_info) {
+                           std::string name = param_info.param;
+                           std::replace(name.begin(), name.end(), '-', '_');
+                           return name;
+                         });
+
+TEST(CreateMethod, UnknownNamesAreRefusedWithTheKnownOnes) {
+  try {
+    CreateMethod("akaze", MethodConfig{});
+    FAIL() << "no error";
+  } catch (const Error& error) {
+    EXPECT_THAT(error.what(), HasSubstr("unknown method 'akaze'"));
+    EXPECT_THAT(error.what(), HasSubstr("clahe-orb"));
+  }
+}
+
+TEST(OptionsForMethod, SwitchesTheStagesOfEachBaseline) {
+  const features::ExtractorOptions base;
+  EXPECT_EQ(OptionsForMethod("orb", base).enhancement.method, image::EnhancementMethod::kNone);
+  EXPECT_EQ(OptionsForMethod("he-orb", base).enhancement.method,
+            image::EnhancementMethod::kHistogramEqualization);
+  const auto clahe = OptionsForMethod("clahe-orb", base);
+  EXPECT_EQ(clahe.enhancement.method, image::EnhancementMethod::kClahe);
+  EXPECT_FALSE(clahe.edge_filter.enabled || clahe.nms_filter.enabled ||
+               clahe.dynamic_filter.enabled);
+  const auto paper = OptionsForMethod("paper", base);
+  EXPECT_TRUE(paper.edge_filter.enabled && paper.nms_filter.enabled &&
+              paper.dynamic_filter.enabled);
+  EXPECT_THROW(OptionsForMethod("orb-opencv", base), Error);
+}
+
+}  // namespace
+}  // namespace noctua::pipeline
