@@ -9,5 +9,7 @@ namespace noctua::app {
 
 // Each Add*Command adds one subcommand (with its --help) and binds its action.
 // Keep this list in the order of `noctua --help`.
+void AddAteCommand(CLI::App& app);
+void AddRpeCommand(CLI::App& app);
 
 }  // namespace noctua::app
