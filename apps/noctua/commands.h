@@ -9,6 +9,8 @@ namespace noctua::app {
 
 // Each Add*Command adds one subcommand (with its --help) and binds its action.
 // Keep this list in the order of `noctua --help`.
+void AddDemoCommand(CLI::App& app);
+void AddExtractCommand(CLI::App& app);
 void AddAteCommand(CLI::App& app);
 void AddRpeCommand(CLI::App& app);
 

@@ -16,6 +16,8 @@ int main(int argc, char** argv) {
       [&] { spdlog::set_level(verbose ? spdlog::level::debug : spdlog::level::info); });
   spdlog::set_pattern("[%l] %v");
   // Subcommands (one Add*Command per cmd_<name>.cc, declared in commands.h):
+  noctua::app::AddDemoCommand(app);
+  noctua::app::AddExtractCommand(app);
   noctua::app::AddAteCommand(app);
   noctua::app::AddRpeCommand(app);
 

@@ -1,0 +1,146 @@
+// End-to-end checks of the noctua command: exit codes, one-line errors and the files it writes.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "noctua/testing/shared_data.h"
+
+namespace {
+
+using ::testing::HasSubstr;
+
+struct CommandResult {
+  int exit_code = -1;
+  std::string output;  // stdout and stderr together
+};
+
+CommandResult RunNoctua(const std::string& arguments) {
+  const std::string command = std::string(NOCTUA_BINARY) + " " + arguments + " 2>&1";
+  CommandResult result;
+  FILE* pipe = popen(command.c_str(), "r");
+  if (pipe == nullptr) return result;
+  std::array<char, 4096> buffer{};
+  while (fgets(buffer.data(), buffer.size(), pipe) != nullptr) result.output += buffer.data();
+  const int status = pclose(pipe);
+  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return result;
+}
+
+class CliTest : public ::testing::Test {
+ protected:
+  void SetUp() override { std::filesystem::create_directories(dir_); }
+  void TearDown() override { std::filesystem::remove_all(dir_); }
+  std::filesystem::path dir_ =
+      std::filesystem::temp_directory_path() / ("noctua_cli_test_" + std::to_string(::getpid()));
+};
+
+TEST_F(CliTest, DemoWritesOverlaysAndASummaryAndCanBeRunAgain) {
+  const auto out = dir_ / "demo";
+  const CommandResult first = RunNoctua("demo --out " + out.string());
+  ASSERT_EQ(first.exit_code, 0) << first.output;
+  EXPECT_THAT(first.output, HasSubstr("| dark-15pct | paper |"));
+  EXPECT_TRUE(std::filesystem::exists(out / "summary.md"));
+  EXPECT_TRUE(std::filesystem::exists(out / "overlay_dark-15pct_paper.png"));
+  std::ifstream in(out / "summary.json");
+  const auto summary = nlohmann::json::parse(in);
+  ASSERT_EQ(summary.size(), 8u);
+  for (const auto& entry : summary) {
+    if (entry["method"] == "paper") {
+      EXPECT_EQ(entry["points_on_person"], 0);
+    }
+  }
+  // Its own earlier output is not "a user's folder": a second run overwrites it.
+  EXPECT_EQ(RunNoctua("demo --out " + out.string()).exit_code, 0);
+}
+
+TEST_F(CliTest, ExtractWritesOneOverlayPerImageAndStageCounts) {
+  const auto frames = noctua::testing::Fr1RgbPaths(2);
+  const auto out = dir_ / "extract";
+  const CommandResult result =
+      RunNoctua("extract " + frames[0].string() + " " + frames[1].string() +
+                " --method clahe-orb --out " + out.string());
+  ASSERT_EQ(result.exit_code, 0) << result.output;
+  std::ifstream in(out / "summary.json");
+  const auto summary = nlohmann::json::parse(in);
+  EXPECT_EQ(summary["method"], "clahe-orb");
+  ASSERT_EQ(summary["images"].size(), 2u);
+  for (const auto& image : summary["images"]) {
+    EXPECT_GT(image["keypoints"].get<int>(), 500);
+    EXPECT_GE(image["counts"]["detected"].get<int>(), image["counts"]["final"].get<int>());
+    EXPECT_TRUE(image["stage_ms"].contains("fast"));
+    EXPECT_TRUE(std::filesystem::exists(out / image["overlay"].get<std::string>()));
+  }
+}
+
+TEST_F(CliTest, PaperSaysWhichStagesRan) {
+  const auto frame = noctua::testing::Fr1RgbPaths(1)[0];
+  const auto out = dir_ / "paper";
+  const CommandResult result = RunNoctua("extract " + frame.string() + " --out " + out.string());
+  ASSERT_EQ(result.exit_code, 0) << result.output;
+  std::ifstream in(out / "summary.json");
+  const auto summary = nlohmann::json::parse(in);
+  const auto& image = summary["images"][0];
+  EXPECT_THAT(image["stages_ran"].dump(), HasSubstr("nms-filter"));
+  EXPECT_THAT(image["stages_ran"].dump() + image["stages_skipped"].dump(),
+              HasSubstr("edge-filter"));
+}
+
+TEST_F(CliTest, BadInputFailsWithAOneLineReason) {
+  const auto missing =
+      RunNoctua("extract " + (dir_ / "absent.png").string() + " --out " + (dir_ / "o1").string());
+  EXPECT_EQ(missing.exit_code, 1);
+  EXPECT_THAT(missing.output, HasSubstr("absent.png: no such file"));
+
+  const auto corrupt = dir_ / "corrupt.png";
+  std::ofstream(corrupt) << "not a png";
+  const auto bad = RunNoctua("extract " + corrupt.string() + " --out " + (dir_ / "o2").string());
+  EXPECT_EQ(bad.exit_code, 1);
+  EXPECT_THAT(bad.output, HasSubstr("corrupt.png: cannot decode"));
+
+  const auto frame = noctua::testing::Fr1RgbPaths(1)[0];
+  const auto small_mask = dir_ / "mask.png";
+  cv::imwrite(small_mask.string(), cv::Mat(10, 10, CV_8UC1, cv::Scalar(0)));
+  const auto mismatch = RunNoctua("extract " + frame.string() + " --mask " + small_mask.string() +
+                                  " --out " + (dir_ / "o3").string());
+  EXPECT_EQ(mismatch.exit_code, 1);
+  EXPECT_THAT(mismatch.output, HasSubstr("mask is 10x10"));
+
+  const auto unknown =
+      RunNoctua("extract " + frame.string() + " --method akaze --out " + (dir_ / "o4").string());
+  EXPECT_EQ(unknown.exit_code, 1);
+  EXPECT_THAT(unknown.output, HasSubstr("unknown method 'akaze'"));
+
+  const auto depth16 = dir_ / "depth16.png";
+  cv::imwrite(depth16.string(), cv::Mat(480, 640, CV_16UC1, cv::Scalar(1000)));
+  const auto sixteen =
+      RunNoctua("extract " + depth16.string() + " --out " + (dir_ / "o5").string());
+  EXPECT_EQ(sixteen.exit_code, 1);
+  EXPECT_THAT(sixteen.output, HasSubstr("expected an 8-bit image"));
+}
+
+TEST_F(CliTest, ExistingOutputFolderIsNotOverwrittenWithoutForce) {
+  const auto out = dir_ / "taken";
+  std::filesystem::create_directories(out);
+  std::ofstream(out / "precious.txt") << "mine";
+  const auto frame = noctua::testing::Fr1RgbPaths(1)[0];
+  const auto refused = RunNoctua("extract " + frame.string() + " --out " + out.string());
+  EXPECT_EQ(refused.exit_code, 1);
+  EXPECT_THAT(refused.output, HasSubstr("--force"));
+  EXPECT_EQ(RunNoctua("extract " + frame.string() + " --force --out " + out.string()).exit_code, 0);
+  EXPECT_TRUE(std::filesystem::exists(out / "precious.txt"));
+}
+
+TEST_F(CliTest, HelpExitsZeroForEveryCommand) {
+  EXPECT_EQ(RunNoctua("--help").exit_code, 0);
+  EXPECT_EQ(RunNoctua("demo --help").exit_code, 0);
+  EXPECT_EQ(RunNoctua("extract --help").exit_code, 0);
+  EXPECT_NE(RunNoctua("").exit_code, 0);
+}
+
+}  // namespace
