@@ -10,6 +10,7 @@ packages=(
   libyaml-cpp-dev nlohmann-json3-dev libcli11-dev libspdlog-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   gnuplot-nox
+  libfftw3-dev
 )
 missing=()
 for package in "${packages[@]}"; do

@@ -1,0 +1,66 @@
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+#include "noctua/edges/classic.h"
+#include "noctua/edges/edge_map.h"
+#include "noctua/edges/phase_congruency.h"
+
+namespace noctua::edges {
+
+enum class EdgeMethod {
+  kPhaseCongruency,      // "pc": phasecong3, the reference
+  kPhaseCongruencyFast,  // "pc-fast": the monogenic fast variant, for every frame
+  kCanny,                // "canny": Gaussian + Canny
+  kSobel,                // "sobel"
+  kPrewitt,              // "prewitt"
+  kRoberts,              // "roberts"
+};
+
+// Parses the names above; throws noctua::Error listing them on anything else.
+EdgeMethod ParseEdgeMethod(const std::string& name);
+std::string ToString(EdgeMethod method);
+// All methods, in the order of the comparison panel.
+std::vector<EdgeMethod> AllEdgeMethods();
+
+struct EdgeDetectorOptions {
+  EdgeMethod method = EdgeMethod::kPhaseCongruencyFast;
+  PhaseCongruencyOptions reference;
+  FastPhaseCongruencyOptions fast;
+  EdgeMapOptions reference_thresholds;  // NMS + hysteresis on the reference's M
+  // The fast variant's PC runs higher than phasecong3's M on the same edges (no moment over
+  // orientations); 0.2 / 0.3 gave the best agreement with the reference's map on fr1 frames,
+  // normal and darkened (docs/edges.md).
+  EdgeMapOptions fast_thresholds{0.2, 0.3};
+  ClassicEdgeOptions classic;
+
+  void Check() const;
+};
+
+// One edge detector: image in, CV_8U map of its size out (255 on edges).
+class EdgeDetector {
+ public:
+  explicit EdgeDetector(const EdgeDetectorOptions& options);
+
+  // Accepts 8-bit grey, BGR or BGRA (converted to grey). Throws noctua::Error for bad input.
+  cv::Mat Detect(const cv::Mat& image) const;
+
+  const EdgeDetectorOptions& options() const { return options_; }
+
+ private:
+  EdgeDetectorOptions options_;
+  std::shared_ptr<FastPhaseCongruency> fast_;  // filters cached across frames
+};
+
+std::unique_ptr<EdgeDetector> CreateEdgeDetector(const EdgeDetectorOptions& options);
+
+// Wraps a detector as the extractor's edge-map source (a std::function, so that edges/ does not
+// depend on features/); the detector is shared, its filter cache reused frame after frame.
+std::function<cv::Mat(const cv::Mat&)> MakeEdgeMapSource(
+    std::shared_ptr<const EdgeDetector> detector);
+
+}  // namespace noctua::edges

@@ -1,0 +1,159 @@
+#include "noctua/edges/edge_map.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <opencv2/imgproc.hpp>
+#include <vector>
+
+#include "noctua/util/error.h"
+
+namespace noctua::edges {
+namespace {
+
+float Bilinear(const cv::Mat& image, float x, float y) {
+  // Callers keep (x, y) inside the image; on its last row or column the far neighbour gets
+  // weight 0 but is read from inside.
+  const int x0 = std::min(static_cast<int>(std::floor(x)), image.cols - 2);
+  const int y0 = std::min(static_cast<int>(std::floor(y)), image.rows - 2);
+  const float fx = x - static_cast<float>(x0);
+  const float fy = y - static_cast<float>(y0);
+  const float* row0 = image.ptr<float>(y0);
+  const float* row1 = image.ptr<float>(y0 + 1);
+  return (1.0f - fy) * ((1.0f - fx) * row0[x0] + fx * row0[x0 + 1]) +
+         fy * ((1.0f - fx) * row1[x0] + fx * row1[x0 + 1]);
+}
+
+}  // namespace
+
+void EdgeMapOptions::Check() const {
+  CheckOption(low_threshold >= 0.0 && low_threshold <= 1.0, "low_threshold must be in [0, 1]");
+  CheckOption(high_threshold >= low_threshold && high_threshold <= 1.0,
+              "high_threshold must be in [low_threshold, 1]");
+}
+
+cv::Mat NonMaximumSuppression(const cv::Mat& strength, const cv::Mat& orientation,
+                              double min_strength) {
+  if (strength.type() != CV_32F || orientation.type() != CV_32F ||
+      strength.size() != orientation.size()) {
+    throw Error("non-maximum suppression: strength and orientation must be CV_32F of one size");
+  }
+  // Offsets of the neighbour along the normal per whole degree, as Kovesi's nonmaxsup (his
+  // orientations are whole degrees): no trigonometry per pixel.
+  constexpr int kBins = 180;
+  float offset_x[kBins];
+  float offset_y[kBins];
+  for (int degree = 0; degree < kBins; ++degree) {
+    const double angle = degree * std::numbers::pi / kBins;
+    offset_x[degree] = static_cast<float>(std::cos(angle));
+    offset_y[degree] = static_cast<float>(-std::sin(angle));  // y grows downwards in the image
+  }
+  const float to_bin = static_cast<float>(kBins / std::numbers::pi);
+  const float floor_value = std::max(static_cast<float>(min_strength), 1e-7f);
+  cv::Mat thinned = cv::Mat::zeros(strength.size(), CV_32F);
+  // Neighbours lie within one pixel, so the loop stays one pixel inside the image and the
+  // bilinear reads stay inside it.
+  for (int r = 1; r + 1 < strength.rows; ++r) {
+    const float* s = strength.ptr<float>(r);
+    const float* a = orientation.ptr<float>(r);
+    float* out = thinned.ptr<float>(r);
+    for (int c = 1; c + 1 < strength.cols; ++c) {
+      const float value = s[c];
+      if (value < floor_value) continue;
+      const int bin = static_cast<int>(a[c] * to_bin + 0.5f) % kBins;
+      const float dx = offset_x[bin];
+      const float dy = offset_y[bin];
+      const float ahead =
+          Bilinear(strength, static_cast<float>(c) + dx, static_cast<float>(r) + dy);
+      if (!(value > ahead)) continue;
+      const float behind =
+          Bilinear(strength, static_cast<float>(c) - dx, static_cast<float>(r) - dy);
+      if (value >= behind) out[c] = value;
+    }
+  }
+  return thinned;
+}
+
+cv::Mat HysteresisThreshold(const cv::Mat& strength, double low, double high) {
+  if (strength.type() != CV_32F) throw Error("hysteresis: strength must be CV_32F");
+  if (low > high) throw Error("hysteresis: low threshold above high threshold");
+  // Zero never belongs to an edge, even with a zero low threshold.
+  const float weak = std::max(static_cast<float>(low), 1e-7f);
+  const float strong = std::max(static_cast<float>(high), weak);
+  const int rows = strength.rows;
+  const int cols = strength.cols;
+  cv::Mat edges = cv::Mat::zeros(strength.size(), CV_8U);
+  // Grows each edge from its strong pixels over 8-connected weak ones; the edge pixels are a
+  // few percent of the image, so a stack beats labelling every component.
+  std::vector<cv::Point> stack;
+  for (int r = 0; r < rows; ++r) {
+    const float* s = strength.ptr<float>(r);
+    for (int c = 0; c < cols; ++c) {
+      if (s[c] < strong || edges.at<unsigned char>(r, c) != 0) continue;
+      edges.at<unsigned char>(r, c) = 255;
+      stack.emplace_back(c, r);
+      while (!stack.empty()) {
+        const cv::Point p = stack.back();
+        stack.pop_back();
+        for (int y = std::max(p.y - 1, 0); y <= std::min(p.y + 1, rows - 1); ++y) {
+          const float* sy = strength.ptr<float>(y);
+          unsigned char* ey = edges.ptr<unsigned char>(y);
+          for (int x = std::max(p.x - 1, 0); x <= std::min(p.x + 1, cols - 1); ++x) {
+            if (ey[x] == 0 && sy[x] >= weak) {
+              ey[x] = 255;
+              stack.emplace_back(x, y);
+            }
+          }
+        }
+      }
+    }
+  }
+  return edges;
+}
+
+cv::Mat EdgeMapFromPhaseCongruency(const PhaseCongruency& pc, const EdgeMapOptions& options) {
+  options.Check();
+  // Pixels below the low threshold can never be edges: NMS skips them.
+  return HysteresisThreshold(
+      NonMaximumSuppression(pc.max_moment, pc.orientation, options.low_threshold),
+      options.low_threshold, options.high_threshold);
+}
+
+}  // namespace noctua::edges
+
+namespace noctua::edges {
+
+EdgeAgreement CompareEdgeMaps(const cv::Mat& test, const cv::Mat& reference, int tolerance_px) {
+  if (test.type() != CV_8U || reference.type() != CV_8U || test.size() != reference.size()) {
+    throw Error("edge comparison: both maps must be CV_8U of one size");
+  }
+  if (tolerance_px < 0) throw Error("edge comparison: tolerance must be >= 0");
+  const cv::Mat kernel = cv::getStructuringElement(
+      cv::MORPH_RECT, cv::Size(2 * tolerance_px + 1, 2 * tolerance_px + 1));
+  const cv::Mat test_on = test != 0;
+  const cv::Mat reference_on = reference != 0;
+  cv::Mat test_near;
+  cv::Mat reference_near;
+  cv::dilate(test_on, test_near, kernel);
+  cv::dilate(reference_on, reference_near, kernel);
+  EdgeAgreement result;
+  result.test_pixels = cv::countNonZero(test_on);
+  result.reference_pixels = cv::countNonZero(reference_on);
+  if (result.test_pixels == 0 && result.reference_pixels == 0) {
+    result.precision = result.recall = result.f_measure = 1.0;
+    return result;
+  }
+  if (result.test_pixels > 0) {
+    result.precision =
+        static_cast<double>(cv::countNonZero(test_on & reference_near)) / result.test_pixels;
+  }
+  if (result.reference_pixels > 0) {
+    result.recall =
+        static_cast<double>(cv::countNonZero(reference_on & test_near)) / result.reference_pixels;
+  }
+  const double sum = result.precision + result.recall;
+  result.f_measure = sum > 0.0 ? 2.0 * result.precision * result.recall / sum : 0.0;
+  return result;
+}
+
+}  // namespace noctua::edges
