@@ -136,10 +136,45 @@ TEST_F(CliTest, ExistingOutputFolderIsNotOverwrittenWithoutForce) {
   EXPECT_TRUE(std::filesystem::exists(out / "precious.txt"));
 }
 
+TEST_F(CliTest, EdgesWritesOneMapPerMethodAndThePanel) {
+  const auto frame = noctua::testing::Fr1RgbPaths(1)[0];
+  const auto out = dir_ / "edges";
+  const CommandResult result =
+      RunNoctua("edges " + frame.string() + " --method pc-fast,canny --out " + out.string());
+  ASSERT_EQ(result.exit_code, 0) << result.output;
+  const std::string stem = "0_" + frame.stem().string();
+  for (const char* method : {"pc-fast", "canny"}) {
+    const cv::Mat map =
+        cv::imread((out / (stem + "_" + method + ".png")).string(), cv::IMREAD_UNCHANGED);
+    ASSERT_EQ(map.type(), CV_8UC1) << method;
+    EXPECT_EQ(map.size(), cv::Size(640, 480)) << method;
+    EXPECT_GT(cv::countNonZero(map), 1000) << method;
+  }
+  EXPECT_FALSE(std::filesystem::exists(out / (stem + "_sobel.png")));
+  // The panel shows the input and all six methods, four tiles a row.
+  const cv::Mat panel = cv::imread((out / (stem + "_panel.png")).string());
+  EXPECT_EQ(panel.size(), cv::Size(4 * 640, 2 * 480));
+  std::ifstream in(out / "edges.json");
+  const auto summary = nlohmann::json::parse(in);
+  EXPECT_GT(summary["images"][0]["methods"]["pc-fast"]["edge_fraction"].get<double>(), 0.001);
+
+  const auto unknown =
+      RunNoctua("edges " + frame.string() + " --method laplace --out " + (dir_ / "e2").string());
+  EXPECT_EQ(unknown.exit_code, 1);
+  EXPECT_THAT(unknown.output, HasSubstr("unknown edge method 'laplace'"));
+  const auto tiny = dir_ / "tiny.png";
+  cv::imwrite(tiny.string(), cv::Mat(8, 8, CV_8UC1, cv::Scalar(0)));
+  const auto small =
+      RunNoctua("edges " + tiny.string() + " --method pc --out " + (dir_ / "e3").string());
+  EXPECT_EQ(small.exit_code, 1);
+  EXPECT_THAT(small.output, HasSubstr("smaller than the minimum"));
+}
+
 TEST_F(CliTest, HelpExitsZeroForEveryCommand) {
   EXPECT_EQ(RunNoctua("--help").exit_code, 0);
   EXPECT_EQ(RunNoctua("demo --help").exit_code, 0);
   EXPECT_EQ(RunNoctua("extract --help").exit_code, 0);
+  EXPECT_EQ(RunNoctua("edges --help").exit_code, 0);
   EXPECT_NE(RunNoctua("").exit_code, 0);
 }
 

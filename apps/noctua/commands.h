@@ -11,6 +11,7 @@ namespace noctua::app {
 // Keep this list in the order of `noctua --help`.
 void AddDemoCommand(CLI::App& app);
 void AddExtractCommand(CLI::App& app);
+void AddEdgesCommand(CLI::App& app);
 void AddAteCommand(CLI::App& app);
 void AddRpeCommand(CLI::App& app);
 

@@ -18,6 +18,7 @@ int main(int argc, char** argv) {
   // Subcommands (one Add*Command per cmd_<name>.cc, declared in commands.h):
   noctua::app::AddDemoCommand(app);
   noctua::app::AddExtractCommand(app);
+  noctua::app::AddEdgesCommand(app);
   noctua::app::AddAteCommand(app);
   noctua::app::AddRpeCommand(app);
 

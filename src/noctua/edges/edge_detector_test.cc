@@ -136,6 +136,20 @@ TEST(EdgeDetector, EdgeMapSourceServesTheExtractor) {
   EXPECT_THROW(MakeEdgeMapSource(nullptr), Error);
 }
 
+TEST(EdgeMapFromPhaseCongruency, EqualsHysteresisOfNmsOnARealFrame) {
+  // The edge map fuses the two steps for speed; it must give exactly their composition.
+  const FastPhaseCongruency fast{FastPhaseCongruencyOptions()};
+  const PhaseCongruency pc = fast.Compute(Fr1Gray(50));
+  for (const EdgeMapOptions& options : {EdgeMapOptions{}, EdgeMapOptions{0.2, 0.3}}) {
+    const cv::Mat fused = EdgeMapFromPhaseCongruency(pc, options);
+    const cv::Mat composed = HysteresisThreshold(
+        NonMaximumSuppression(pc.max_moment, pc.orientation, options.low_threshold),
+        options.low_threshold, options.high_threshold);
+    EXPECT_GT(cv::countNonZero(fused), 1000);
+    EXPECT_EQ(cv::norm(fused, composed, cv::NORM_L1), 0.0);
+  }
+}
+
 TEST(EdgeMethod, NamesRoundTrip) {
   for (EdgeMethod method : AllEdgeMethods()) EXPECT_EQ(ParseEdgeMethod(ToString(method)), method);
   EXPECT_EQ(ParseEdgeMethod("pc-fast"), EdgeMethod::kPhaseCongruencyFast);

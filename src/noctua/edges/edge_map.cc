@@ -24,6 +24,43 @@ float Bilinear(const cv::Mat& image, float x, float y) {
          fy * ((1.0f - fx) * row1[x0] + fx * row1[x0 + 1]);
 }
 
+// Offsets of the neighbour along the normal per whole degree, as Kovesi's nonmaxsup (his
+// orientations are whole degrees): no trigonometry per pixel.
+struct NormalOffsets {
+  static constexpr int kBins = 180;
+  float x[kBins];
+  float y[kBins];
+};
+
+const NormalOffsets& Offsets() {
+  static const NormalOffsets offsets = [] {
+    NormalOffsets result{};
+    for (int degree = 0; degree < NormalOffsets::kBins; ++degree) {
+      const double angle = degree * std::numbers::pi / NormalOffsets::kBins;
+      result.x[degree] = static_cast<float>(std::cos(angle));
+      result.y[degree] = static_cast<float>(-std::sin(angle));  // y grows downwards
+    }
+    return result;
+  }();
+  return offsets;
+}
+
+// Whether interior pixel (r, c) is a maximum along its normal: strictly above the neighbour ahead,
+// at least the one behind (so a symmetric two-pixel ridge keeps one pixel).
+bool IsNormalMaximum(const cv::Mat& strength, const cv::Mat& orientation,
+                     const NormalOffsets& offsets, int r, int c) {
+  const float to_bin = static_cast<float>(NormalOffsets::kBins / std::numbers::pi);
+  const float value = strength.at<float>(r, c);
+  const int bin =
+      static_cast<int>(orientation.at<float>(r, c) * to_bin + 0.5f) % NormalOffsets::kBins;
+  const float dx = offsets.x[bin];
+  const float dy = offsets.y[bin];
+  const float x = static_cast<float>(c);
+  const float y = static_cast<float>(r);
+  if (!(value > Bilinear(strength, x + dx, y + dy))) return false;
+  return value >= Bilinear(strength, x - dx, y - dy);
+}
+
 }  // namespace
 
 void EdgeMapOptions::Check() const {
@@ -38,37 +75,18 @@ cv::Mat NonMaximumSuppression(const cv::Mat& strength, const cv::Mat& orientatio
       strength.size() != orientation.size()) {
     throw Error("non-maximum suppression: strength and orientation must be CV_32F of one size");
   }
-  // Offsets of the neighbour along the normal per whole degree, as Kovesi's nonmaxsup (his
-  // orientations are whole degrees): no trigonometry per pixel.
-  constexpr int kBins = 180;
-  float offset_x[kBins];
-  float offset_y[kBins];
-  for (int degree = 0; degree < kBins; ++degree) {
-    const double angle = degree * std::numbers::pi / kBins;
-    offset_x[degree] = static_cast<float>(std::cos(angle));
-    offset_y[degree] = static_cast<float>(-std::sin(angle));  // y grows downwards in the image
-  }
-  const float to_bin = static_cast<float>(kBins / std::numbers::pi);
+  const NormalOffsets& offsets = Offsets();
   const float floor_value = std::max(static_cast<float>(min_strength), 1e-7f);
   cv::Mat thinned = cv::Mat::zeros(strength.size(), CV_32F);
   // Neighbours lie within one pixel, so the loop stays one pixel inside the image and the
   // bilinear reads stay inside it.
   for (int r = 1; r + 1 < strength.rows; ++r) {
     const float* s = strength.ptr<float>(r);
-    const float* a = orientation.ptr<float>(r);
     float* out = thinned.ptr<float>(r);
     for (int c = 1; c + 1 < strength.cols; ++c) {
-      const float value = s[c];
-      if (value < floor_value) continue;
-      const int bin = static_cast<int>(a[c] * to_bin + 0.5f) % kBins;
-      const float dx = offset_x[bin];
-      const float dy = offset_y[bin];
-      const float ahead =
-          Bilinear(strength, static_cast<float>(c) + dx, static_cast<float>(r) + dy);
-      if (!(value > ahead)) continue;
-      const float behind =
-          Bilinear(strength, static_cast<float>(c) - dx, static_cast<float>(r) - dy);
-      if (value >= behind) out[c] = value;
+      if (s[c] >= floor_value && IsNormalMaximum(strength, orientation, offsets, r, c)) {
+        out[c] = s[c];
+      }
     }
   }
   return thinned;
@@ -113,10 +131,46 @@ cv::Mat HysteresisThreshold(const cv::Mat& strength, double low, double high) {
 
 cv::Mat EdgeMapFromPhaseCongruency(const PhaseCongruency& pc, const EdgeMapOptions& options) {
   options.Check();
-  // Pixels below the low threshold can never be edges: NMS skips them.
-  return HysteresisThreshold(
-      NonMaximumSuppression(pc.max_moment, pc.orientation, options.low_threshold),
-      options.low_threshold, options.high_threshold);
+  const cv::Mat& strength = pc.max_moment;
+  const cv::Mat& orientation = pc.orientation;
+  if (strength.type() != CV_32F || orientation.type() != CV_32F ||
+      strength.size() != orientation.size()) {
+    throw Error("edge map: PC and orientation must be CV_32F of one size");
+  }
+  // HysteresisThreshold(NonMaximumSuppression(M, orientation, low), low, high) in one pass:
+  // NMS is evaluated only on the pixels hysteresis reaches (those >= low next to an edge), not
+  // on the whole frame. state: 0 unvisited, 1 not an edge, 255 edge.
+  const float weak = std::max(static_cast<float>(options.low_threshold), 1e-7f);
+  const float strong = std::max(static_cast<float>(options.high_threshold), weak);
+  const NormalOffsets& offsets = Offsets();
+  const int rows = strength.rows;
+  const int cols = strength.cols;
+  cv::Mat state = cv::Mat::zeros(strength.size(), CV_8U);
+  std::vector<cv::Point> stack;
+  auto visit = [&](int r, int c) {
+    unsigned char& s = state.at<unsigned char>(r, c);
+    if (s != 0) return;
+    const bool edge =
+        strength.at<float>(r, c) >= weak && IsNormalMaximum(strength, orientation, offsets, r, c);
+    s = edge ? 255 : 1;
+    if (edge) stack.emplace_back(c, r);
+  };
+  for (int r = 1; r + 1 < rows; ++r) {
+    const float* s = strength.ptr<float>(r);
+    for (int c = 1; c + 1 < cols; ++c) {
+      if (s[c] < strong) continue;
+      visit(r, c);
+      while (!stack.empty()) {
+        const cv::Point p = stack.back();
+        stack.pop_back();
+        for (int y = std::max(p.y - 1, 1); y <= std::min(p.y + 1, rows - 2); ++y) {
+          for (int x = std::max(p.x - 1, 1); x <= std::min(p.x + 1, cols - 2); ++x) visit(y, x);
+        }
+      }
+    }
+  }
+  cv::threshold(state, state, 254, 255, cv::THRESH_BINARY);
+  return state;
 }
 
 }  // namespace noctua::edges

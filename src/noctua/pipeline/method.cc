@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <opencv2/imgproc.hpp>
 
+#include "noctua/edges/edge_detector.h"
 #include "noctua/features/ofast.h"
 #include "noctua/image/enhancement.h"
 #include "noctua/util/error.h"
@@ -164,6 +165,8 @@ std::unique_ptr<FeatureMethod> CreateMethod(const std::string& name, const Metho
   }
   if (name == "paper") {
     auto method = std::make_unique<ExtractorMethod>(name, OptionsForMethod(name, config.extractor));
+    method->extractor().SetEdgeMapSource(
+        edges::MakeEdgeMapSource(edges::CreateEdgeDetector(edges::EdgeDetectorOptions())));
     return method;
   }
   std::string known;

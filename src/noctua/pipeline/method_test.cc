@@ -3,6 +3,12 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+
+#include "noctua/edges/edge_detector.h"
+#include "noctua/image/enhancement.h"
 #include "noctua/testing/shared_data.h"
 #include "noctua/util/error.h"
 
@@ -73,6 +79,32 @@ TEST(OptionsForMethod, SwitchesTheStagesOfEachBaseline) {
   EXPECT_TRUE(paper.edge_filter.enabled && paper.nms_filter.enabled &&
               paper.dynamic_filter.enabled);
   EXPECT_THROW(OptionsForMethod("orb-opencv", base), Error);
+}
+
+TEST(CreateMethod, PaperKeepsOnlyPointsNearPhaseCongruencyEdges) {
+  const cv::Mat frame =
+      noctua::testing::ReadImageOrThrow(noctua::testing::Fr1RgbPaths(1)[0], cv::IMREAD_COLOR);
+  const MethodConfig config;
+  const auto result = CreateMethod("paper", config)->Run(frame);
+  ASSERT_GT(result.keypoints.size(), 50u);
+  EXPECT_THAT(::testing::PrintToString(result.stats.stages_ran), HasSubstr("edge-filter"));
+  EXPECT_LT(result.stats.after_edge, result.stats.after_dynamic);
+
+  // The same edge map, made independently: the fast PC map of the CLAHE-enhanced frame.
+  const features::ExtractorOptions options = OptionsForMethod("paper", config.extractor);
+  const cv::Mat enhanced = image::Enhancer(options.enhancement).Apply(image::ToGray8U(frame));
+  const cv::Mat edge_map =
+      edges::CreateEdgeDetector(edges::EdgeDetectorOptions())->Detect(enhanced);
+  cv::Mat distance;
+  cv::distanceTransform(edge_map == 0, distance, cv::DIST_L2, cv::DIST_MASK_PRECISE);
+  for (const cv::KeyPoint& point : result.keypoints) {
+    const double scale = std::pow(options.fast.scale_factor, point.octave);
+    const cv::Point pixel(std::clamp(cvRound(point.pt.x), 0, frame.cols - 1),
+                          std::clamp(cvRound(point.pt.y), 0, frame.rows - 1));
+    // Within the level's radius of a PC edge pixel, plus a pixel for rounding between levels.
+    EXPECT_LE(distance.at<float>(pixel), options.edge_filter.radius_px * scale + 1.5)
+        << "point " << point.pt << " octave " << point.octave;
+  }
 }
 
 }  // namespace
