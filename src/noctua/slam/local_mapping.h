@@ -1,0 +1,30 @@
+#pragma once
+
+#include <list>
+
+#include "noctua/slam/map.h"
+#include "noctua/slam/slam_options.h"
+
+namespace noctua::slam {
+
+// Integrates each new keyframe into the map, in the tracking thread so that a run is
+// deterministic: observations and covisibility, culling of new points that are rarely matched,
+// local bundle adjustment, culling of redundant keyframes (ORB-SLAM's LocalMapping, without
+// triangulation of new points between keyframes: RGB-D points come from depth).
+class LocalMapper {
+ public:
+  LocalMapper(const SlamOptions& options, const ScalePyramid& pyramid)
+      : options_(options), pyramid_(pyramid) {}
+
+  void ProcessKeyFrame(KeyFrame* keyframe);
+
+ private:
+  void CullRecentPoints(const KeyFrame* keyframe);
+  void CullRedundantKeyFrames(KeyFrame* keyframe);
+
+  const SlamOptions& options_;
+  const ScalePyramid& pyramid_;
+  std::list<MapPoint*> recent_points_;
+};
+
+}  // namespace noctua::slam

@@ -1,0 +1,188 @@
+#include "noctua/slam/map.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace noctua::slam {
+
+bool KeyFrameIdLess::operator()(const KeyFrame* a, const KeyFrame* b) const {
+  return a->id() < b->id();
+}
+
+MapPoint::MapPoint(long id, const Eigen::Vector3d& position, KeyFrame* reference)
+    : id_(id), position_(position), reference_(reference), first_keyframe_id_(reference->id()) {}
+
+void MapPoint::AddObservation(KeyFrame* keyframe, int index) {
+  observations_.emplace(keyframe, index);
+}
+
+void MapPoint::EraseObservation(KeyFrame* keyframe) {
+  if (observations_.erase(keyframe) == 0) return;
+  if (reference_ == keyframe && !observations_.empty()) reference_ = observations_.begin()->first;
+  if (observations_.size() < 2) SetBad();
+}
+
+void MapPoint::SetBad() {
+  if (bad_) return;
+  bad_ = true;
+  for (const auto& [keyframe, index] : observations_) keyframe->SetMapPoint(index, nullptr);
+  observations_.clear();
+}
+
+void MapPoint::UpdateDescriptor() {
+  std::vector<const uchar*> descriptors;
+  for (const auto& [keyframe, index] : observations_) {
+    if (!keyframe->bad()) descriptors.push_back(keyframe->features().descriptor(index));
+  }
+  if (descriptors.empty()) return;
+  const std::size_t n = descriptors.size();
+  std::size_t best = 0;
+  int best_median = 256 * 2;
+  std::vector<int> distances(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    for (std::size_t j = 0; j < n; ++j)
+      distances[j] = DescriptorDistance(descriptors[i], descriptors[j]);
+    std::nth_element(distances.begin(),
+                     distances.begin() + static_cast<std::ptrdiff_t>((n - 1) / 2), distances.end());
+    const int median = distances[(n - 1) / 2];
+    if (median < best_median) {
+      best_median = median;
+      best = i;
+    }
+  }
+  descriptor_ = cv::Mat(1, 32, CV_8U, const_cast<uchar*>(descriptors[best])).clone();
+}
+
+void MapPoint::SetDescriptor(const uchar* descriptor) {
+  descriptor_ = cv::Mat(1, 32, CV_8U, const_cast<uchar*>(descriptor)).clone();
+}
+
+void MapPoint::UpdateNormalAndDepth(const ScalePyramid& pyramid) {
+  if (observations_.empty() || reference_ == nullptr) return;
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();
+  for (const auto& [keyframe, index] : observations_) {
+    normal += (position_ - keyframe->CameraCentre()).normalized();
+  }
+  normal_ = normal.normalized();
+  const auto found = observations_.find(reference_);
+  if (found == observations_.end()) return;
+  const double distance = (position_ - reference_->CameraCentre()).norm();
+  const int level = reference_->features().octave(found->second);
+  max_distance_ = distance * pyramid.scale[static_cast<std::size_t>(level)];
+  min_distance_ = max_distance_ / pyramid.scale.back();
+}
+
+int MapPoint::PredictScale(double distance, const ScalePyramid& pyramid) const {
+  const int level =
+      static_cast<int>(std::ceil(std::log(max_distance_ / distance) / pyramid.log_scale_factor));
+  return std::clamp(level, 0, pyramid.num_levels - 1);
+}
+
+KeyFrame::KeyFrame(long id, const Frame& frame)
+    : id_(id),
+      frame_id_(frame.id),
+      timestamp_(frame.timestamp),
+      features_(frame.features),
+      pose_cw_(frame.pose_cw),
+      map_points_(frame.map_points) {}
+
+int KeyFrame::IndexOf(const MapPoint* point) const {
+  const auto found = point->observations().find(const_cast<KeyFrame*>(this));
+  return found == point->observations().end() ? -1 : found->second;
+}
+
+int KeyFrame::TrackedMapPoints(int min_observations) const {
+  int count = 0;
+  for (const MapPoint* point : map_points_) {
+    if (point != nullptr && !point->bad() && point->num_observations() >= min_observations) ++count;
+  }
+  return count;
+}
+
+void KeyFrame::UpdateConnections() {
+  std::map<KeyFrame*, int, KeyFrameIdLess> counts;
+  for (const MapPoint* point : map_points_) {
+    if (point == nullptr || point->bad()) continue;
+    for (const auto& [keyframe, index] : point->observations()) {
+      if (keyframe != this && !keyframe->bad()) ++counts[keyframe];
+    }
+  }
+  if (counts.empty()) return;
+  constexpr int kMinWeight = 15;
+  KeyFrame* strongest = nullptr;
+  int strongest_weight = 0;
+  connections_.clear();
+  for (const auto& [keyframe, weight] : counts) {
+    if (weight > strongest_weight) {
+      strongest_weight = weight;
+      strongest = keyframe;
+    }
+    if (weight >= kMinWeight) {
+      connections_[keyframe] = weight;
+      keyframe->AddConnection(this, weight);
+    }
+  }
+  if (connections_.empty()) {
+    connections_[strongest] = strongest_weight;
+    strongest->AddConnection(this, strongest_weight);
+  }
+}
+
+std::vector<KeyFrame*> KeyFrame::BestCovisibles(int count) const {
+  std::vector<std::pair<int, KeyFrame*>> sorted;
+  for (const auto& [keyframe, weight] : connections_) {
+    if (!keyframe->bad()) sorted.emplace_back(weight, keyframe);
+  }
+  std::stable_sort(sorted.begin(), sorted.end(),
+                   [](const auto& a, const auto& b) { return a.first > b.first; });
+  std::vector<KeyFrame*> best;
+  for (const auto& [weight, keyframe] : sorted) {
+    if (static_cast<int>(best.size()) >= count) break;
+    best.push_back(keyframe);
+  }
+  return best;
+}
+
+void KeyFrame::AddConnection(KeyFrame* other, int weight) { connections_[other] = weight; }
+
+void KeyFrame::EraseConnection(KeyFrame* other) { connections_.erase(other); }
+
+void KeyFrame::SetBad() {
+  if (bad_ || id_ == 0) return;  // the first keyframe anchors the map
+  for (const auto& [keyframe, weight] : connections_) keyframe->EraseConnection(this);
+  connections_.clear();
+  bad_ = true;
+  for (std::size_t i = 0; i < map_points_.size(); ++i) {
+    MapPoint* point = map_points_[i];
+    map_points_[i] = nullptr;
+    if (point != nullptr) point->EraseObservation(this);
+  }
+}
+
+KeyFrame* Map::AddKeyFrame(const Frame& frame) {
+  keyframes_.push_back(std::make_unique<KeyFrame>(static_cast<long>(keyframes_.size()), frame));
+  return keyframes_.back().get();
+}
+
+MapPoint* Map::AddMapPoint(const Eigen::Vector3d& position, KeyFrame* reference) {
+  points_.push_back(
+      std::make_unique<MapPoint>(static_cast<long>(points_.size()), position, reference));
+  return points_.back().get();
+}
+
+std::vector<KeyFrame*> Map::KeyFrames() const {
+  std::vector<KeyFrame*> good;
+  for (const auto& keyframe : keyframes_) {
+    if (!keyframe->bad()) good.push_back(keyframe.get());
+  }
+  return good;
+}
+
+int Map::NumKeyFrames() const { return static_cast<int>(KeyFrames().size()); }
+
+int Map::NumMapPoints() const {
+  return static_cast<int>(std::count_if(points_.begin(), points_.end(),
+                                        [](const auto& point) { return !point->bad(); }));
+}
+
+}  // namespace noctua::slam

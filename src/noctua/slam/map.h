@@ -1,0 +1,145 @@
+#pragma once
+
+#include <Eigen/Core>
+#include <map>
+#include <memory>
+#include <opencv2/core.hpp>
+#include <set>
+#include <vector>
+
+#include "noctua/geometry/se3.h"
+#include "noctua/slam/frame.h"
+
+namespace noctua::slam {
+
+class KeyFrame;
+
+// Orders keyframes by id, so that every container of keyframes iterates in the same order on
+// every run (pointer order would follow the allocator and break determinism).
+struct KeyFrameIdLess {
+  bool operator()(const KeyFrame* a, const KeyFrame* b) const;
+};
+
+// A 3D point of the map with the keyframes that observe it. Points are never freed during a run
+// (a culled point is marked bad), so raw pointers held by frames stay valid.
+class MapPoint {
+ public:
+  MapPoint(long id, const Eigen::Vector3d& position, KeyFrame* reference);
+
+  long id() const { return id_; }
+  const Eigen::Vector3d& position() const { return position_; }
+  void set_position(const Eigen::Vector3d& position) { position_ = position; }
+  bool bad() const { return bad_; }
+  const uchar* descriptor() const { return descriptor_.ptr<uchar>(); }
+  const Eigen::Vector3d& normal() const { return normal_; }
+  KeyFrame* reference() const { return reference_; }
+  long first_keyframe_id() const { return first_keyframe_id_; }
+
+  const std::map<KeyFrame*, int, KeyFrameIdLess>& observations() const { return observations_; }
+  int num_observations() const { return static_cast<int>(observations_.size()); }
+  void AddObservation(KeyFrame* keyframe, int index);
+  // Removes one observation; a point left with fewer than two keyframes is marked bad.
+  void EraseObservation(KeyFrame* keyframe);
+  // Marks the point bad and removes it from every keyframe that observes it.
+  void SetBad();
+
+  // The observation descriptor with the least median distance to the others (ORB-SLAM).
+  void UpdateDescriptor();
+  // For temporary points that have no observation: the descriptor of the keypoint they lift.
+  void SetDescriptor(const uchar* descriptor);
+  // Mean viewing direction and the distance range in which the point can be detected.
+  void UpdateNormalAndDepth(const ScalePyramid& pyramid);
+  double min_distance() const { return 0.8 * min_distance_; }
+  double max_distance() const { return 1.2 * max_distance_; }
+  int PredictScale(double distance, const ScalePyramid& pyramid) const;
+
+  // How often the point was predicted visible in a tracked frame, and actually matched there.
+  void IncreaseVisible() { ++visible_; }
+  void IncreaseFound() { ++found_; }
+  double FoundRatio() const { return visible_ > 0 ? static_cast<double>(found_) / visible_ : 0.0; }
+
+  // Scratch of the tracker (ORB-SLAM keeps these on the point too).
+  long last_frame_seen = -1;
+  long local_map_frame = -1;
+  bool track_in_view = false;
+  double track_x = 0.0, track_y = 0.0, track_right_x = 0.0, track_view_cos = 0.0;
+  int track_level = 0;
+  long local_ba_keyframe = -1;
+
+ private:
+  long id_;
+  Eigen::Vector3d position_;
+  KeyFrame* reference_;
+  long first_keyframe_id_;
+  std::map<KeyFrame*, int, KeyFrameIdLess> observations_;
+  cv::Mat descriptor_;
+  Eigen::Vector3d normal_ = Eigen::Vector3d::Zero();
+  double min_distance_ = 0.0;
+  double max_distance_ = 0.0;
+  int visible_ = 1;
+  int found_ = 1;
+  bool bad_ = false;
+};
+
+// A frame kept in the map: its features, pose, map points and covisibility links.
+class KeyFrame {
+ public:
+  KeyFrame(long id, const Frame& frame);
+
+  long id() const { return id_; }
+  long frame_id() const { return frame_id_; }
+  double timestamp() const { return timestamp_; }
+  const FrameFeatures& features() const { return *features_; }
+  const geometry::Pose& pose_cw() const { return pose_cw_; }
+  void set_pose_cw(const geometry::Pose& pose) { pose_cw_ = pose; }
+  Eigen::Vector3d CameraCentre() const { return pose_cw_.inverse().translation(); }
+  bool bad() const { return bad_; }
+
+  const std::vector<MapPoint*>& map_points() const { return map_points_; }
+  MapPoint* map_point(int i) const { return map_points_[static_cast<std::size_t>(i)]; }
+  void SetMapPoint(int i, MapPoint* point) { map_points_[static_cast<std::size_t>(i)] = point; }
+  int IndexOf(const MapPoint* point) const;
+  // Good map points observed by at least `min_observations` keyframes.
+  int TrackedMapPoints(int min_observations) const;
+
+  // Recomputes covisibility from shared map points (ORB-SLAM: links of weight >= 15, or the
+  // strongest one) and updates the linked keyframes' links too.
+  void UpdateConnections();
+  const std::map<KeyFrame*, int, KeyFrameIdLess>& connections() const { return connections_; }
+  // Linked keyframes by decreasing weight (ties by id), at most `count`.
+  std::vector<KeyFrame*> BestCovisibles(int count) const;
+  void AddConnection(KeyFrame* other, int weight);
+  void EraseConnection(KeyFrame* other);
+
+  // Removes the keyframe from the map's graph: its links and its observations.
+  void SetBad();
+
+ private:
+  long id_;
+  long frame_id_;
+  double timestamp_;
+  std::shared_ptr<const FrameFeatures> features_;
+  geometry::Pose pose_cw_;
+  std::vector<MapPoint*> map_points_;
+  std::map<KeyFrame*, int, KeyFrameIdLess> connections_;
+  bool bad_ = false;
+};
+
+// Owns every keyframe and map point of a run.
+class Map {
+ public:
+  KeyFrame* AddKeyFrame(const Frame& frame);
+  MapPoint* AddMapPoint(const Eigen::Vector3d& position, KeyFrame* reference);
+
+  // Good keyframes in id order.
+  std::vector<KeyFrame*> KeyFrames() const;
+  int NumKeyFrames() const;
+  int NumMapPoints() const;
+  const std::vector<std::unique_ptr<KeyFrame>>& all_keyframes() const { return keyframes_; }
+
+ private:
+  std::vector<std::unique_ptr<KeyFrame>> keyframes_;
+  std::vector<std::unique_ptr<MapPoint>> points_;
+};
+
+}  // namespace noctua::slam

@@ -1,0 +1,248 @@
+#include "noctua/slam/matcher.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <opencv2/features2d.hpp>
+
+namespace noctua::slam {
+namespace {
+
+constexpr int kHistogramBins = 30;
+
+// Radius multiplier by viewing angle (ORB-SLAM: tighter when seen from the same direction).
+double RadiusByViewingCos(double view_cos) { return view_cos > 0.998 ? 2.5 : 4.0; }
+
+}  // namespace
+
+void Matcher::KeepConsistentRotation(const std::vector<float>& angle_changes,
+                                     std::vector<int>& matched_indices) const {
+  if (!check_orientation_) return;
+  std::array<std::vector<std::size_t>, kHistogramBins> bins;
+  for (std::size_t k = 0; k < angle_changes.size(); ++k) {
+    float change = angle_changes[k];
+    if (change < 0.0f) change += 360.0f;
+    int bin = static_cast<int>(std::lround(change * kHistogramBins / 360.0f));
+    if (bin == kHistogramBins) bin = 0;
+    bins[static_cast<std::size_t>(bin)].push_back(k);
+  }
+  std::array<std::size_t, kHistogramBins> sizes{};
+  for (int b = 0; b < kHistogramBins; ++b)
+    sizes[static_cast<std::size_t>(b)] = bins[static_cast<std::size_t>(b)].size();
+  std::array<int, kHistogramBins> order{};
+  for (int b = 0; b < kHistogramBins; ++b) order[static_cast<std::size_t>(b)] = b;
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
+    return sizes[static_cast<std::size_t>(a)] > sizes[static_cast<std::size_t>(b)];
+  });
+  // ORB-SLAM keeps the second and third bins only when they hold at least a tenth of the first.
+  const std::size_t top = sizes[static_cast<std::size_t>(order[0])];
+  std::vector<bool> keep_bin(kHistogramBins, false);
+  keep_bin[static_cast<std::size_t>(order[0])] = true;
+  for (int r = 1; r < 3; ++r) {
+    if (sizes[static_cast<std::size_t>(order[static_cast<std::size_t>(r)])] * 10 >= top) {
+      keep_bin[static_cast<std::size_t>(order[static_cast<std::size_t>(r)])] = true;
+    }
+  }
+  for (int b = 0; b < kHistogramBins; ++b) {
+    if (keep_bin[static_cast<std::size_t>(b)]) continue;
+    for (std::size_t k : bins[static_cast<std::size_t>(b)]) matched_indices[k] = -1;
+  }
+}
+
+int Matcher::SearchByProjection(Frame& current, const Frame& last, double radius) const {
+  const FrameFeatures& features = *current.features;
+  const auto& camera = features.camera();
+  std::vector<float> angle_changes;
+  std::vector<int> matched;  // index into current per accepted match
+  for (int i = 0; i < last.size(); ++i) {
+    MapPoint* point = last.map_points[static_cast<std::size_t>(i)];
+    if (point == nullptr || point->bad() || last.outlier[static_cast<std::size_t>(i)]) continue;
+    const Eigen::Vector3d in_camera = current.pose_cw * point->position();
+    if (in_camera.z() <= 0.0) continue;
+    const Eigen::Vector2d pixel = camera.Project(in_camera);
+    if (!features.InBounds(pixel.x(), pixel.y())) continue;
+    const double right_x = pixel.x() - bf_ / in_camera.z();
+    const int last_octave = last.features->octave(i);
+    const double window = radius * pyramid_.scale[static_cast<std::size_t>(last_octave)];
+    const auto candidates = features.InArea(pixel.x(), pixel.y(), window,
+                                            std::max(0, last_octave - 1), last_octave + 1);
+    int best_distance = 256;
+    int best_index = -1;
+    for (int candidate : candidates) {
+      MapPoint* existing = current.map_points[static_cast<std::size_t>(candidate)];
+      if (existing != nullptr && existing->num_observations() > 0) continue;
+      if (features.right_u(candidate) > 0.0 &&
+          std::abs(right_x - features.right_u(candidate)) > window) {
+        continue;
+      }
+      const int distance = DescriptorDistance(point->descriptor(), features.descriptor(candidate));
+      if (distance < best_distance) {
+        best_distance = distance;
+        best_index = candidate;
+      }
+    }
+    if (best_distance > kThresholdHigh) continue;
+    current.map_points[static_cast<std::size_t>(best_index)] = point;
+    matched.push_back(best_index);
+    angle_changes.push_back(last.features->keypoint(i).angle - features.keypoint(best_index).angle);
+  }
+  std::vector<int> kept = matched;
+  KeepConsistentRotation(angle_changes, kept);
+  int count = 0;
+  for (std::size_t k = 0; k < matched.size(); ++k) {
+    if (kept[k] < 0) {
+      current.map_points[static_cast<std::size_t>(matched[k])] = nullptr;
+    } else {
+      ++count;
+    }
+  }
+  return count;
+}
+
+int Matcher::SearchByProjection(Frame& frame, const std::vector<MapPoint*>& points,
+                                double radius) const {
+  const FrameFeatures& features = *frame.features;
+  int count = 0;
+  for (MapPoint* point : points) {
+    if (!point->track_in_view || point->bad()) continue;
+    const int level = point->track_level;
+    const double window = radius * RadiusByViewingCos(point->track_view_cos) *
+                          pyramid_.scale[static_cast<std::size_t>(level)];
+    const auto candidates =
+        features.InArea(point->track_x, point->track_y, window, std::max(0, level - 1), level);
+    int best_distance = 256, second_distance = 256;
+    int best_level = -1, second_level = -1;
+    int best_index = -1;
+    for (int candidate : candidates) {
+      MapPoint* existing = frame.map_points[static_cast<std::size_t>(candidate)];
+      if (existing != nullptr && existing->num_observations() > 0) continue;
+      if (features.right_u(candidate) > 0.0 &&
+          std::abs(point->track_right_x - features.right_u(candidate)) > window) {
+        continue;
+      }
+      const int distance = DescriptorDistance(point->descriptor(), features.descriptor(candidate));
+      if (distance < best_distance) {
+        second_distance = best_distance;
+        second_level = best_level;
+        best_distance = distance;
+        best_level = features.octave(candidate);
+        best_index = candidate;
+      } else if (distance < second_distance) {
+        second_distance = distance;
+        second_level = features.octave(candidate);
+      }
+    }
+    if (best_distance > kThresholdHigh) continue;
+    if (best_level == second_level && best_distance > ratio_ * second_distance) continue;
+    frame.map_points[static_cast<std::size_t>(best_index)] = point;
+    ++count;
+  }
+  return count;
+}
+
+int Matcher::SearchByProjection(Frame& frame, const KeyFrame& keyframe,
+                                const std::vector<MapPoint*>& already, double radius,
+                                int max_distance) const {
+  const FrameFeatures& features = *frame.features;
+  const auto& camera = features.camera();
+  const Eigen::Vector3d centre = frame.CameraCentre();
+  std::vector<float> angle_changes;
+  std::vector<int> matched;
+  for (int i = 0; i < keyframe.features().size(); ++i) {
+    MapPoint* point = keyframe.map_point(i);
+    if (point == nullptr || point->bad()) continue;
+    if (std::find(already.begin(), already.end(), point) != already.end()) continue;
+    const Eigen::Vector3d in_camera = frame.pose_cw * point->position();
+    if (in_camera.z() <= 0.0) continue;
+    const Eigen::Vector2d pixel = camera.Project(in_camera);
+    if (!features.InBounds(pixel.x(), pixel.y())) continue;
+    const double distance_to_centre = (point->position() - centre).norm();
+    if (distance_to_centre < point->min_distance() || distance_to_centre > point->max_distance()) {
+      continue;
+    }
+    const int level = point->PredictScale(distance_to_centre, pyramid_);
+    const double window = radius * pyramid_.scale[static_cast<std::size_t>(level)];
+    const auto candidates =
+        features.InArea(pixel.x(), pixel.y(), window, std::max(0, level - 1), level + 1);
+    int best_distance = 256;
+    int best_index = -1;
+    for (int candidate : candidates) {
+      if (frame.map_points[static_cast<std::size_t>(candidate)] != nullptr) continue;
+      const int distance = DescriptorDistance(point->descriptor(), features.descriptor(candidate));
+      if (distance < best_distance) {
+        best_distance = distance;
+        best_index = candidate;
+      }
+    }
+    if (best_distance > max_distance) continue;
+    frame.map_points[static_cast<std::size_t>(best_index)] = point;
+    matched.push_back(best_index);
+    angle_changes.push_back(keyframe.features().keypoint(i).angle -
+                            features.keypoint(best_index).angle);
+  }
+  std::vector<int> kept = matched;
+  KeepConsistentRotation(angle_changes, kept);
+  int count = 0;
+  for (std::size_t k = 0; k < matched.size(); ++k) {
+    if (kept[k] < 0) {
+      frame.map_points[static_cast<std::size_t>(matched[k])] = nullptr;
+    } else {
+      ++count;
+    }
+  }
+  return count;
+}
+
+int Matcher::SearchByDescriptor(const KeyFrame& keyframe, const Frame& frame,
+                                std::vector<MapPoint*>& matches) const {
+  matches.assign(static_cast<std::size_t>(frame.size()), nullptr);
+  std::vector<int> keyframe_indices;
+  cv::Mat keyframe_descriptors;
+  for (int i = 0; i < keyframe.features().size(); ++i) {
+    MapPoint* point = keyframe.map_point(i);
+    if (point == nullptr || point->bad()) continue;
+    keyframe_indices.push_back(i);
+    keyframe_descriptors.push_back(keyframe.features().descriptors().row(i));
+  }
+  if (keyframe_indices.empty() || frame.size() < 2) return 0;
+  cv::BFMatcher matcher(cv::NORM_HAMMING);
+  std::vector<std::vector<cv::DMatch>> knn;
+  matcher.knnMatch(keyframe_descriptors, frame.features->descriptors(), knn, 2);
+  // Per frame keypoint, the best keyframe point that passed the tests.
+  std::vector<int> best_query(static_cast<std::size_t>(frame.size()), -1);
+  std::vector<float> best_distance(static_cast<std::size_t>(frame.size()), 1e9f);
+  for (std::size_t q = 0; q < knn.size(); ++q) {
+    if (knn[q].size() < 2) continue;
+    const cv::DMatch& best = knn[q][0];
+    if (best.distance > kThresholdLow || best.distance >= ratio_ * knn[q][1].distance) continue;
+    const auto train = static_cast<std::size_t>(best.trainIdx);
+    if (best.distance < best_distance[train]) {
+      best_distance[train] = best.distance;
+      best_query[train] = static_cast<int>(q);
+    }
+  }
+  std::vector<int> matched;
+  std::vector<float> angle_changes;
+  for (int f = 0; f < frame.size(); ++f) {
+    const int q = best_query[static_cast<std::size_t>(f)];
+    if (q < 0) continue;
+    matched.push_back(f);
+    angle_changes.push_back(
+        keyframe.features().keypoint(keyframe_indices[static_cast<std::size_t>(q)]).angle -
+        frame.features->keypoint(f).angle);
+  }
+  std::vector<int> kept = matched;
+  KeepConsistentRotation(angle_changes, kept);
+  int count = 0;
+  for (std::size_t k = 0; k < matched.size(); ++k) {
+    if (kept[k] < 0) continue;
+    const int f = matched[k];
+    const int q = best_query[static_cast<std::size_t>(f)];
+    matches[static_cast<std::size_t>(f)] =
+        keyframe.map_point(keyframe_indices[static_cast<std::size_t>(q)]);
+    ++count;
+  }
+  return count;
+}
+
+}  // namespace noctua::slam

@@ -1,0 +1,48 @@
+#pragma once
+
+#include <vector>
+
+#include "noctua/slam/frame.h"
+#include "noctua/slam/map.h"
+
+namespace noctua::slam {
+
+// Descriptor matching between map and frame, after ORB-SLAM's ORBmatcher: thresholds on Hamming
+// distance, a ratio test, and a check that the matches agree on the change of keypoint angle.
+class Matcher {
+ public:
+  static constexpr int kThresholdHigh = 100;
+  static constexpr int kThresholdLow = 50;
+
+  Matcher(double ratio, bool check_orientation, const ScalePyramid& pyramid, double bf)
+      : ratio_(ratio), check_orientation_(check_orientation), pyramid_(pyramid), bf_(bf) {}
+
+  // Projects the map points of `last` into `current` (at current.pose_cw) and matches within
+  // `radius` pixels times the keypoint's scale, around the last octave (motion model).
+  int SearchByProjection(Frame& current, const Frame& last, double radius) const;
+
+  // Matches points flagged track_in_view (by the tracker's frustum test) into `frame`.
+  int SearchByProjection(Frame& frame, const std::vector<MapPoint*>& points, double radius) const;
+
+  // Projects a keyframe's points into `frame` (relocalisation), skipping points in `already`.
+  int SearchByProjection(Frame& frame, const KeyFrame& keyframe,
+                         const std::vector<MapPoint*>& already, double radius,
+                         int max_distance) const;
+
+  // Brute-force descriptor matching of a keyframe's map points against every keypoint of the
+  // frame (in place of ORB-SLAM's bag of words). Returns the map point per frame keypoint.
+  int SearchByDescriptor(const KeyFrame& keyframe, const Frame& frame,
+                         std::vector<MapPoint*>& matches) const;
+
+ private:
+  // Keeps only matches whose angle change falls in the three most common 12-degree bins.
+  void KeepConsistentRotation(const std::vector<float>& angle_changes,
+                              std::vector<int>& matched_indices) const;
+
+  double ratio_;
+  bool check_orientation_;
+  const ScalePyramid& pyramid_;
+  double bf_;
+};
+
+}  // namespace noctua::slam

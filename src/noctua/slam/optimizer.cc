@@ -1,0 +1,280 @@
+#include "noctua/slam/optimizer.h"
+
+#include <ceres/ceres.h>
+
+#include <array>
+#include <cmath>
+#include <map>
+#include <set>
+
+namespace noctua::slam {
+namespace {
+
+// Camera parameters the residuals need; copied into each functor.
+struct Intrinsics {
+  double fx, fy, cx, cy, bf;
+};
+
+Intrinsics IntrinsicsOf(const FrameFeatures& features, double bf) {
+  const auto& camera = features.camera();
+  return {camera.fx(), camera.fy(), camera.cx(), camera.cy(), bf};
+}
+
+// The observation of a point: undistorted pixel, and the virtual right coordinate when the
+// keypoint has depth (a negative right coordinate: monocular residual).
+struct Observation {
+  double u, v, right_u, inverse_sigma;
+};
+
+template <typename T>
+void Residuals(const Intrinsics& k, const Observation& o, const Eigen::Matrix<T, 3, 1>& p, T* r,
+               bool stereo) {
+  const T inverse_z = T(1.0) / p.z();
+  const T u = T(k.fx) * p.x() * inverse_z + T(k.cx);
+  const T v = T(k.fy) * p.y() * inverse_z + T(k.cy);
+  r[0] = (u - T(o.u)) * T(o.inverse_sigma);
+  r[1] = (v - T(o.v)) * T(o.inverse_sigma);
+  if (stereo) r[2] = (u - T(k.bf) * inverse_z - T(o.right_u)) * T(o.inverse_sigma);
+}
+
+// Reprojection error with the point fixed (motion-only optimisation).
+template <int kResiduals>
+struct PoseOnlyCost {
+  Intrinsics k;
+  Observation o;
+  Eigen::Vector3d point;
+  template <typename T>
+  bool operator()(const T* rotation, const T* translation, T* residuals) const {
+    const Eigen::Map<const Eigen::Quaternion<T>> q(rotation);
+    const Eigen::Map<const Eigen::Matrix<T, 3, 1>> t(translation);
+    const Eigen::Matrix<T, 3, 1> p = q * point.cast<T>() + t;
+    Residuals(k, o, p, residuals, kResiduals == 3);
+    return true;
+  }
+};
+
+// Reprojection error with pose and point free (bundle adjustment).
+template <int kResiduals>
+struct FullCost {
+  Intrinsics k;
+  Observation o;
+  template <typename T>
+  bool operator()(const T* rotation, const T* translation, const T* point, T* residuals) const {
+    const Eigen::Map<const Eigen::Quaternion<T>> q(rotation);
+    const Eigen::Map<const Eigen::Matrix<T, 3, 1>> t(translation);
+    const Eigen::Map<const Eigen::Matrix<T, 3, 1>> x(point);
+    const Eigen::Matrix<T, 3, 1> p = q * x + t;
+    Residuals(k, o, p, residuals, kResiduals == 3);
+    return true;
+  }
+};
+
+Observation ObservationOf(const FrameFeatures& features, int i, const ScalePyramid& pyramid) {
+  const Eigen::Vector2d& pixel = features.undistorted(i);
+  return {pixel.x(), pixel.y(), features.right_u(i),
+          std::sqrt(pyramid.inverse_sigma2[static_cast<std::size_t>(features.octave(i))])};
+}
+
+// χ² of an observation (already weighted by the level variance) at a pose and point.
+double Chi2(const Intrinsics& k, const Observation& o, const geometry::Pose& pose_cw,
+            const Eigen::Vector3d& point, bool* behind) {
+  const Eigen::Vector3d p = pose_cw * point;
+  *behind = p.z() <= 0.0;
+  if (*behind) return 1e12;
+  double r[3] = {0, 0, 0};
+  Residuals(k, o, p, r, o.right_u >= 0.0);
+  return r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
+}
+
+// Pose as the arrays Ceres optimises: Eigen quaternion (x, y, z, w) and translation.
+struct PoseBlock {
+  std::array<double, 4> rotation;
+  std::array<double, 3> translation;
+
+  explicit PoseBlock(const geometry::Pose& pose) {
+    const Eigen::Quaterniond q(pose.rotation());
+    rotation = {q.x(), q.y(), q.z(), q.w()};
+    translation = {pose.translation().x(), pose.translation().y(), pose.translation().z()};
+  }
+  geometry::Pose ToPose() const {
+    return geometry::MakePose(
+        Eigen::Quaterniond(rotation[3], rotation[0], rotation[1], rotation[2]),
+        Eigen::Vector3d(translation[0], translation[1], translation[2]));
+  }
+};
+
+ceres::Solver::Options SolverOptions(int iterations, ceres::LinearSolverType solver) {
+  ceres::Solver::Options options;
+  options.linear_solver_type = solver;
+  options.max_num_iterations = iterations;
+  options.num_threads = 1;  // deterministic results
+  options.logging_type = ceres::SILENT;
+  options.minimizer_progress_to_stdout = false;
+  return options;
+}
+
+}  // namespace
+
+int OptimizePose(Frame& frame, const ScalePyramid& pyramid, double bf) {
+  const FrameFeatures& features = *frame.features;
+  const Intrinsics k = IntrinsicsOf(features, bf);
+  std::vector<int> matched;
+  for (int i = 0; i < frame.size(); ++i) {
+    MapPoint* point = frame.map_points[static_cast<std::size_t>(i)];
+    frame.outlier[static_cast<std::size_t>(i)] = false;
+    if (point != nullptr && !point->bad()) matched.push_back(i);
+  }
+  if (matched.size() < 3) return 0;
+
+  const geometry::Pose initial = frame.pose_cw;
+  geometry::Pose estimate = initial;
+  ceres::HuberLoss huber_mono(std::sqrt(kChi2Mono));
+  ceres::HuberLoss huber_stereo(std::sqrt(kChi2Stereo));
+  int inliers = 0;
+  constexpr int kRounds = 4;
+  for (int round = 0; round < kRounds; ++round) {
+    // Each round starts again from the prediction (ORB-SLAM), with the current inlier set.
+    PoseBlock block(initial);
+    ceres::Problem::Options problem_options;
+    problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+    ceres::Problem problem(problem_options);
+    problem.AddParameterBlock(block.rotation.data(), 4, new ceres::EigenQuaternionManifold);
+    problem.AddParameterBlock(block.translation.data(), 3);
+    const bool robust = round < kRounds - 1;
+    int residual_blocks = 0;
+    for (int i : matched) {
+      if (frame.outlier[static_cast<std::size_t>(i)]) continue;
+      const Observation o = ObservationOf(features, i, pyramid);
+      const Eigen::Vector3d point = frame.map_points[static_cast<std::size_t>(i)]->position();
+      if (o.right_u >= 0.0) {
+        problem.AddResidualBlock(new ceres::AutoDiffCostFunction<PoseOnlyCost<3>, 3, 4, 3>(
+                                     new PoseOnlyCost<3>{k, o, point}),
+                                 robust ? &huber_stereo : nullptr, block.rotation.data(),
+                                 block.translation.data());
+      } else {
+        problem.AddResidualBlock(new ceres::AutoDiffCostFunction<PoseOnlyCost<2>, 2, 4, 3>(
+                                     new PoseOnlyCost<2>{k, o, point}),
+                                 robust ? &huber_mono : nullptr, block.rotation.data(),
+                                 block.translation.data());
+      }
+      ++residual_blocks;
+    }
+    if (residual_blocks < 3) break;
+    ceres::Solver::Summary summary;
+    ceres::Solve(SolverOptions(10, ceres::DENSE_QR), &problem, &summary);
+    estimate = block.ToPose();
+
+    inliers = 0;
+    for (int i : matched) {
+      const Observation o = ObservationOf(features, i, pyramid);
+      bool behind = false;
+      const double chi2 =
+          Chi2(k, o, estimate, frame.map_points[static_cast<std::size_t>(i)]->position(), &behind);
+      const bool is_outlier = behind || chi2 > (o.right_u >= 0.0 ? kChi2Stereo : kChi2Mono);
+      frame.outlier[static_cast<std::size_t>(i)] = is_outlier;
+      if (!is_outlier) ++inliers;
+    }
+    if (inliers < 10) break;
+  }
+  frame.pose_cw = estimate;
+  return inliers;
+}
+
+void LocalBundleAdjustment(KeyFrame* keyframe, const ScalePyramid& pyramid, double bf,
+                           int iterations) {
+  // Local keyframes: this one and its covisible ones; local points: all they see.
+  std::vector<KeyFrame*> local = {keyframe};
+  for (const auto& [other, weight] : keyframe->connections()) {
+    if (!other->bad()) local.push_back(other);
+  }
+  std::set<KeyFrame*, KeyFrameIdLess> local_set(local.begin(), local.end());
+  std::vector<MapPoint*> points;
+  for (KeyFrame* k : local) {
+    for (MapPoint* point : k->map_points()) {
+      if (point == nullptr || point->bad() || point->local_ba_keyframe == keyframe->id()) continue;
+      point->local_ba_keyframe = keyframe->id();
+      points.push_back(point);
+    }
+  }
+  // Fixed keyframes: they see local points but are not local.
+  std::set<KeyFrame*, KeyFrameIdLess> fixed_set;
+  for (MapPoint* point : points) {
+    for (const auto& [observer, index] : point->observations()) {
+      if (!observer->bad() && local_set.count(observer) == 0) fixed_set.insert(observer);
+    }
+  }
+  std::map<KeyFrame*, PoseBlock, KeyFrameIdLess> poses;
+  for (KeyFrame* k : local_set) poses.emplace(k, PoseBlock(k->pose_cw()));
+  for (KeyFrame* k : fixed_set) poses.emplace(k, PoseBlock(k->pose_cw()));
+  std::vector<std::array<double, 3>> positions(points.size());
+  for (std::size_t p = 0; p < points.size(); ++p) {
+    const Eigen::Vector3d& x = points[p]->position();
+    positions[p] = {x.x(), x.y(), x.z()};
+  }
+
+  ceres::Problem::Options problem_options;
+  problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  ceres::Problem problem(problem_options);
+  ceres::HuberLoss huber_mono(std::sqrt(kChi2Mono));
+  ceres::HuberLoss huber_stereo(std::sqrt(kChi2Stereo));
+  for (auto& [k, block] : poses) {
+    problem.AddParameterBlock(block.rotation.data(), 4, new ceres::EigenQuaternionManifold);
+    problem.AddParameterBlock(block.translation.data(), 3);
+    if (fixed_set.count(k) > 0 || k->id() == 0) {
+      problem.SetParameterBlockConstant(block.rotation.data());
+      problem.SetParameterBlockConstant(block.translation.data());
+    }
+  }
+  struct Edge {
+    KeyFrame* keyframe;
+    std::size_t point;
+    Observation observation;
+  };
+  std::vector<Edge> edges;
+  for (std::size_t p = 0; p < points.size(); ++p) {
+    for (const auto& [observer, index] : points[p]->observations()) {
+      if (observer->bad()) continue;
+      const Intrinsics k = IntrinsicsOf(observer->features(), bf);
+      const Observation o = ObservationOf(observer->features(), index, pyramid);
+      PoseBlock& block = poses.at(observer);
+      if (o.right_u >= 0.0) {
+        problem.AddResidualBlock(
+            new ceres::AutoDiffCostFunction<FullCost<3>, 3, 4, 3, 3>(new FullCost<3>{k, o}),
+            &huber_stereo, block.rotation.data(), block.translation.data(), positions[p].data());
+      } else {
+        problem.AddResidualBlock(
+            new ceres::AutoDiffCostFunction<FullCost<2>, 2, 4, 3, 3>(new FullCost<2>{k, o}),
+            &huber_mono, block.rotation.data(), block.translation.data(), positions[p].data());
+      }
+      edges.push_back({observer, p, o});
+    }
+  }
+  if (edges.empty()) return;
+  ceres::Solver::Summary summary;
+  ceres::Solve(SolverOptions(iterations, ceres::DENSE_SCHUR), &problem, &summary);
+
+  for (auto& [k, block] : poses) {
+    if (local_set.count(k) > 0) k->set_pose_cw(block.ToPose());
+  }
+  for (std::size_t p = 0; p < points.size(); ++p) {
+    points[p]->set_position(Eigen::Vector3d(positions[p][0], positions[p][1], positions[p][2]));
+  }
+  // Observations that do not fit the refined map are removed (ORB-SLAM's post-BA cleanup).
+  for (const Edge& edge : edges) {
+    MapPoint* point = points[edge.point];
+    if (point->bad()) continue;
+    bool behind = false;
+    const double chi2 = Chi2(IntrinsicsOf(edge.keyframe->features(), bf), edge.observation,
+                             edge.keyframe->pose_cw(), point->position(), &behind);
+    if (behind || chi2 > (edge.observation.right_u >= 0.0 ? kChi2Stereo : kChi2Mono)) {
+      const int index = edge.keyframe->IndexOf(point);
+      if (index >= 0) edge.keyframe->SetMapPoint(index, nullptr);
+      point->EraseObservation(edge.keyframe);
+    }
+  }
+  for (MapPoint* point : points) {
+    if (!point->bad()) point->UpdateNormalAndDepth(pyramid);
+  }
+}
+
+}  // namespace noctua::slam

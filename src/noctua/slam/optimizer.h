@@ -1,0 +1,26 @@
+#pragma once
+
+#include "noctua/slam/frame.h"
+#include "noctua/slam/map.h"
+#include "noctua/slam/slam_options.h"
+
+namespace noctua::slam {
+
+// χ² thresholds at 95% for 2 (monocular) and 3 (with depth) degrees of freedom, in squared
+// pixels scaled by the keypoint's level variance (ORB-SLAM's values).
+inline constexpr double kChi2Mono = 5.991;
+inline constexpr double kChi2Stereo = 7.815;
+
+// Motion-only optimisation of frame.pose_cw against its matched map points (Ceres, Huber loss).
+// Four rounds; after each, matches whose χ² exceeds the threshold are flagged outliers and left
+// out of the next round, and earlier outliers that fit again come back (ORB-SLAM's scheme; the
+// last round is without the robust loss). Returns the number of inliers.
+int OptimizePose(Frame& frame, const ScalePyramid& pyramid, double bf);
+
+// Local bundle adjustment around `keyframe` (Ceres, Huber loss): the keyframe and its covisible
+// keyframes and all their points are refined; other keyframes that see those points are held
+// fixed, as is the first keyframe. Observations that stay outliers are removed from the map.
+void LocalBundleAdjustment(KeyFrame* keyframe, const ScalePyramid& pyramid, double bf,
+                           int iterations);
+
+}  // namespace noctua::slam

@@ -1,0 +1,85 @@
+#include "noctua/slam/rgbd_slam.h"
+
+#include "noctua/util/error.h"
+#include "noctua/util/timer.h"
+
+namespace noctua::slam {
+
+RgbdSlam::RgbdSlam(const geometry::PinholeCamera& camera, cv::Ptr<cv::Feature2D> extractor,
+                   const SlamOptions& options)
+    : camera_(camera), extractor_(std::move(extractor)), options_(options), tracker_(options) {
+  options_.Check();
+  if (extractor_.empty()) throw Error("slam: no feature extractor given");
+}
+
+TrackResult RgbdSlam::Process(const cv::Mat& image, const cv::Mat& depth_m, double timestamp) {
+  if (image.empty() || image.size() != camera_.size()) {
+    throw Error("slam: image of " + std::to_string(image.cols) + "x" + std::to_string(image.rows) +
+                " does not match the camera's " + std::to_string(camera_.width()) + "x" +
+                std::to_string(camera_.height()));
+  }
+  if (depth_m.size() != image.size() || depth_m.type() != CV_32FC1) {
+    throw Error("slam: depth must be CV_32F metres of the colour image's size");
+  }
+  Stopwatch watch;
+  std::vector<cv::KeyPoint> keypoints;
+  cv::Mat descriptors;
+  extractor_->detectAndCompute(image, cv::noArray(), keypoints, descriptors);
+  const double extract_ms = watch.ElapsedMs();
+  const int keypoint_count = static_cast<int>(keypoints.size());
+  auto features = std::make_shared<const FrameFeatures>(std::move(keypoints), descriptors, depth_m,
+                                                        camera_, options_.bf, options_.min_depth_m);
+  TrackResult result = tracker_.Track(Frame(next_frame_id_++, timestamp, std::move(features)));
+  result.stage_ms["extract"] = extract_ms;
+  result.keypoints = keypoint_count;
+  return result;
+}
+
+io::Trajectory RgbdSlam::Trajectory() const {
+  std::vector<io::StampedPose> poses;
+  for (const FrameRecord& record : tracker_.records()) {
+    if (record.reference == nullptr) continue;
+    const geometry::Pose pose_cw = record.pose_c_r * record.reference->pose_cw();
+    poses.push_back({record.timestamp, pose_cw.inverse()});
+  }
+  return io::Trajectory(std::move(poses));
+}
+
+SequenceRun RunSequence(const io::Sequence& sequence, double depth_factor,
+                        const geometry::PinholeCamera& camera, cv::Ptr<cv::Feature2D> extractor,
+                        const SlamOptions& options, const RunOptions& run_options) {
+  RgbdSlam slam(camera, std::move(extractor), options);
+  const int count = run_options.max_frames > 0
+                        ? std::min(run_options.max_frames, static_cast<int>(sequence.size()))
+                        : static_cast<int>(sequence.size());
+  SequenceRun run;
+  bool started = false;
+  for (int i = 0; i < count; ++i) {
+    Stopwatch total;
+    const io::Frame& frame = sequence.frame(static_cast<std::size_t>(i));
+    io::FrameImages images = sequence.Load(frame, depth_factor);
+    if (run_options.transform_image) images.bgr = run_options.transform_image(i, images.bgr);
+    const double load_ms = total.ElapsedMs();
+    const TrackResult result = slam.Process(images.bgr, images.depth_m, frame.timestamp);
+    FrameOutcome outcome;
+    outcome.timestamp = frame.timestamp;
+    outcome.state = result.state;
+    outcome.method = result.method;
+    outcome.inliers = result.inliers;
+    outcome.new_keyframe = result.new_keyframe;
+    outcome.stage_ms = result.stage_ms;
+    outcome.stage_ms["load"] = load_ms;
+    outcome.stage_ms["total"] = total.ElapsedMs();
+    outcome.keypoints = result.keypoints;
+    if (result.state != TrackingState::kNotInitialised) started = true;
+    if (started && result.state != TrackingState::kOk) run.lost_frames.push_back(i);
+    run.frames.push_back(outcome);
+    if (run_options.progress) run_options.progress(i, count, run.frames.back());
+  }
+  run.trajectory = slam.Trajectory();
+  run.keyframes = slam.tracker().map().NumKeyFrames();
+  run.map_points = slam.tracker().map().NumMapPoints();
+  return run;
+}
+
+}  // namespace noctua::slam

@@ -1,0 +1,43 @@
+#include "noctua/slam/slam_options.h"
+
+#include "noctua/io/yaml_file.h"
+#include "noctua/util/error.h"
+
+namespace noctua::slam {
+
+void SlamOptions::Check() const {
+  CheckOption(scale_factor > 1.0, "slam: scale_factor must be greater than 1");
+  CheckOption(num_levels >= 1 && num_levels <= 32, "slam: num_levels must be in [1, 32]");
+  CheckOption(bf > 0.0, "slam: bf (baseline times fx) must be positive");
+  CheckOption(close_depth_m > 0.0, "slam: close_depth_m must be positive");
+  CheckOption(min_depth_m >= 0.0, "slam: min_depth_m must not be negative");
+  CheckOption(min_initial_points >= 10, "slam: min_initial_points must be at least 10");
+  CheckOption(min_tracked_inliers >= 10, "slam: min_tracked_inliers must be at least 10");
+  CheckOption(min_inliers_after_relocalisation >= min_tracked_inliers,
+              "slam: min_inliers_after_relocalisation must be at least min_tracked_inliers");
+  CheckOption(max_frames_between_keyframes >= 1, "slam: max_frames_between_keyframes must be >= 1");
+  CheckOption(relocalisation_candidates >= 1, "slam: relocalisation_candidates must be >= 1");
+  CheckOption(local_ba_iterations >= 1, "slam: local_ba_iterations must be >= 1");
+  CheckOption(keyframe_redundancy > 0.0 && keyframe_redundancy <= 1.0,
+              "slam: keyframe_redundancy must be in (0, 1]");
+}
+
+SlamSetup LoadSlamSetup(const std::filesystem::path& path) {
+  SlamSetup setup;
+  setup.camera = io::ReadCameraConfig(path);
+  const YAML::Node root = io::LoadYamlFile(path);
+  const double fx = setup.camera.intrinsics.fx;
+  SlamOptions& options = setup.options;
+  options.scale_factor = setup.camera.orb.scale_factor;
+  options.num_levels = setup.camera.orb.num_levels;
+  options.bf = io::OptionalNumber(root, "Camera.bf", fx * 0.0773, path);
+  options.close_depth_m = io::OptionalNumber(root, "ThDepth", 40.0, path) * options.bf / fx;
+  try {
+    options.Check();
+  } catch (const Error& error) {
+    ThrowFileError(path, error.what());
+  }
+  return setup;
+}
+
+}  // namespace noctua::slam

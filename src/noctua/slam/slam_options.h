@@ -1,0 +1,45 @@
+#pragma once
+
+#include <filesystem>
+
+#include "noctua/io/camera_config.h"
+
+namespace noctua::slam {
+
+// Settings of the RGB-D SLAM. Defaults are ORB-SLAM2's for RGB-D (TUM settings files), so that
+// results compare with it; the pyramid must be the one of the feature extractor in use.
+struct SlamOptions {
+  double scale_factor = 1.2;  // extractor pyramid scale (ORBextractor.scaleFactor)
+  int num_levels = 8;         // extractor pyramid levels (ORBextractor.nLevels)
+  // Virtual stereo baseline times fx (ORB-SLAM's Camera.bf, 40 for TUM): the depth of a point
+  // becomes a third, "right image" coordinate u - bf / depth in the reprojection error.
+  double bf = 40.0;
+  // Depth up to which a point is "close" (ORB-SLAM: ThDepth * bf / fx, 40 * 40 / 517 = 3.1 m):
+  // close points are trusted enough to create map points from a single keyframe.
+  double close_depth_m = 3.1;
+  double min_depth_m = 0.1;      // depth readings below this are ignored
+  int min_initial_points = 500;  // keypoints with depth needed to start the map
+  int min_tracked_inliers = 30;  // fewer inliers after local-map tracking: lost
+  int min_inliers_after_relocalisation = 50;
+  int max_frames_between_keyframes = 30;  // ORB-SLAM: the frame rate
+  int relocalisation_candidates = 5;      // keyframes tried by PnP, most descriptor matches first
+  int local_ba_iterations = 10;           // Ceres iterations of the local bundle adjustment
+  bool local_ba = true;                   // off: map points are never refined (for comparison)
+  double keyframe_redundancy = 0.9;       // culled when this share of its points is seen thrice
+
+  // Throws noctua::Error naming the first invalid field.
+  void Check() const;
+};
+
+// Camera and SLAM settings from one ORB-SLAM-style settings file (config/*.yaml): the camera
+// preset (see io::ReadCameraConfig), the pyramid from ORBextractor.scaleFactor / nLevels, and
+// ORB-SLAM's optional Camera.bf (default fx * 0.0773 m, the value of ORB-SLAM's TUM files) and
+// ThDepth (default 40; close depth = ThDepth * bf / fx). Throws noctua::Error naming the file
+// and key for anything missing or invalid.
+struct SlamSetup {
+  io::CameraConfig camera;
+  SlamOptions options;
+};
+SlamSetup LoadSlamSetup(const std::filesystem::path& path);
+
+}  // namespace noctua::slam

@@ -1,0 +1,473 @@
+#include "noctua/slam/tracking.h"
+
+#include <algorithm>
+#include <cmath>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core/eigen.hpp>
+#include <set>
+
+#include "noctua/slam/optimizer.h"
+#include "noctua/util/timer.h"
+
+namespace noctua::slam {
+
+Tracker::Tracker(const SlamOptions& options)
+    : options_(options),
+      pyramid_(options.scale_factor, options.num_levels),
+      mapper_(options_, pyramid_),
+      matcher_(0.9, true, pyramid_, options.bf),
+      strict_matcher_(0.7, true, pyramid_, options.bf) {
+  options_.Check();
+}
+
+TrackResult Tracker::Track(Frame frame) {
+  TrackResult result;
+  current_ = std::make_unique<Frame>(std::move(frame));
+  Stopwatch watch;
+  bool ok = false;
+  if (state_ == TrackingState::kNotInitialised) {
+    ok = Initialise(*current_);
+    result.state = ok ? TrackingState::kOk : TrackingState::kNotInitialised;
+    result.method = ok ? "init" : "";
+    result.new_keyframe = ok;
+    result.inliers = ok ? current_->features->CountWithDepth() : 0;
+    result.stage_ms["track"] = watch.ElapsedMs();
+  } else {
+    if (state_ == TrackingState::kOk) {
+      if (velocity_.has_value() && current_->id >= last_relocalisation_frame_id_ + 2) {
+        ok = TrackWithMotionModel();
+        result.method = "motion";
+      }
+      if (!ok) {
+        ok = TrackReferenceKeyFrame();
+        result.method = "reference";
+      }
+    } else {
+      ok = Relocalise();
+      result.method = "relocalisation";
+    }
+    result.stage_ms["track"] = watch.ElapsedMs();
+    watch.Restart();
+    if (ok) {
+      reference_ = reference_ != nullptr && !reference_->bad() ? reference_ : last_keyframe_;
+      ok = TrackLocalMap();
+    }
+    result.stage_ms["local_map"] = watch.ElapsedMs();
+    watch.Restart();
+    state_ = ok ? TrackingState::kOk : TrackingState::kLost;
+    result.state = state_;
+    result.inliers = ok ? inliers_ : 0;
+    if (!ok) result.method.clear();
+    if (ok) {
+      // A velocity only between consecutive tracked frames; after a loss, none.
+      if (last_ != nullptr && last_->id == current_->id - 1) {
+        velocity_ = current_->pose_cw * last_->pose_cw.inverse();
+      } else {
+        velocity_.reset();
+      }
+      // Temporary visual-odometry points are no map points: forget them.
+      for (std::size_t i = 0; i < current_->map_points.size(); ++i) {
+        MapPoint* point = current_->map_points[i];
+        if (point != nullptr && point->num_observations() < 1) {
+          current_->map_points[i] = nullptr;
+          current_->outlier[i] = false;
+        }
+      }
+      if (NeedNewKeyFrame()) {
+        CreateNewKeyFrame();
+        result.new_keyframe = true;
+      }
+      for (std::size_t i = 0; i < current_->map_points.size(); ++i) {
+        if (current_->outlier[i]) current_->map_points[i] = nullptr;
+      }
+    } else {
+      velocity_.reset();
+    }
+    result.stage_ms["mapping"] = watch.ElapsedMs();
+    ClearTemporaryPoints();
+  }
+  if (state_ == TrackingState::kNotInitialised && ok) state_ = TrackingState::kOk;
+
+  FrameRecord record;
+  record.frame_id = current_->id;
+  record.timestamp = current_->timestamp;
+  if (ok && reference_ != nullptr) {
+    record.reference = reference_;
+    record.pose_c_r = current_->pose_cw * reference_->pose_cw().inverse();
+  }
+  records_.push_back(record);
+  // A lost frame does not become the last frame: the motion model and relocalisation compare
+  // with the last frame that was tracked.
+  if (ok) last_ = std::move(current_);
+  return result;
+}
+
+void Tracker::ClearTemporaryPoints() {
+  for (Frame* frame : {last_.get(), current_.get()}) {
+    if (frame == nullptr) continue;
+    for (MapPoint*& point : frame->map_points) {
+      if (point != nullptr && point->id() < 0) point = nullptr;
+    }
+  }
+  temporary_points_.clear();
+}
+
+bool Tracker::Initialise(Frame& frame) {
+  if (frame.features->CountWithDepth() < options_.min_initial_points) return false;
+  frame.pose_cw = geometry::Pose::Identity();
+  KeyFrame* keyframe = map_.AddKeyFrame(frame);
+  for (int i = 0; i < frame.size(); ++i) {
+    if (frame.features->depth(i) <= 0.0) continue;
+    MapPoint* point = map_.AddMapPoint(frame.Unproject(i), keyframe);
+    point->AddObservation(keyframe, i);
+    keyframe->SetMapPoint(i, point);
+    point->UpdateDescriptor();
+    point->UpdateNormalAndDepth(pyramid_);
+    frame.map_points[static_cast<std::size_t>(i)] = point;
+  }
+  reference_ = last_keyframe_ = keyframe;
+  last_keyframe_frame_id_ = frame.id;
+  local_keyframes_ = {keyframe};
+  return true;
+}
+
+void Tracker::UpdateLastFrame() {
+  // The last frame's pose follows later refinement of its reference keyframe.
+  const FrameRecord& record = records_.back();
+  if (record.reference != nullptr && record.frame_id == last_->id) {
+    last_->pose_cw = record.pose_c_r * record.reference->pose_cw();
+  }
+  // ORB-SLAM's RGB-D visual odometry: close depth points of the last frame that are not in the
+  // map become temporary points, which keeps the motion model matching in fast motion.
+  std::vector<std::pair<double, int>> by_depth;
+  for (int i = 0; i < last_->size(); ++i) {
+    if (last_->features->depth(i) > 0.0) by_depth.emplace_back(last_->features->depth(i), i);
+  }
+  std::sort(by_depth.begin(), by_depth.end());
+  int created = 0;
+  for (const auto& [depth, i] : by_depth) {
+    MapPoint* point = last_->map_points[static_cast<std::size_t>(i)];
+    const bool needs_point = point == nullptr || point->bad() || point->num_observations() < 1;
+    if (needs_point) {
+      // Id -1 marks it temporary; it has no observation, so it never counts as a map point.
+      auto temporary = std::make_unique<MapPoint>(-1, last_->Unproject(i), last_keyframe_);
+      temporary->SetDescriptor(last_->features->descriptor(i));
+      last_->map_points[static_cast<std::size_t>(i)] = temporary.get();
+      temporary_points_.push_back(std::move(temporary));
+    }
+    ++created;
+    if (depth > options_.close_depth_m && created > 100) break;
+  }
+}
+
+bool Tracker::TrackWithMotionModel() {
+  UpdateLastFrame();
+  Frame& frame = *current_;
+  frame.pose_cw = *velocity_ * last_->pose_cw;
+  std::fill(frame.map_points.begin(), frame.map_points.end(), nullptr);
+  int matches = matcher_.SearchByProjection(frame, *last_, 15.0);
+  if (matches < 20) {
+    std::fill(frame.map_points.begin(), frame.map_points.end(), nullptr);
+    matches = matcher_.SearchByProjection(frame, *last_, 30.0);
+  }
+  if (matches < 20) return false;
+  OptimizePose(frame, pyramid_, options_.bf);
+  return DiscardOutliers() >= 10;
+}
+
+int Tracker::DiscardOutliers() {
+  Frame& frame = *current_;
+  int in_map = 0;
+  for (std::size_t i = 0; i < frame.map_points.size(); ++i) {
+    MapPoint* point = frame.map_points[i];
+    if (point == nullptr) continue;
+    if (frame.outlier[i]) {
+      frame.map_points[i] = nullptr;
+      frame.outlier[i] = false;
+      point->last_frame_seen = frame.id;
+    } else if (point->num_observations() > 0) {
+      ++in_map;
+    }
+  }
+  return in_map;
+}
+
+bool Tracker::TrackReferenceKeyFrame() {
+  Frame& frame = *current_;
+  if (reference_ == nullptr || reference_->bad()) reference_ = last_keyframe_;
+  std::vector<MapPoint*> matches;
+  if (strict_matcher_.SearchByDescriptor(*reference_, frame, matches) < 15) return false;
+  frame.map_points = matches;
+  frame.pose_cw = last_->pose_cw;
+  OptimizePose(frame, pyramid_, options_.bf);
+  return DiscardOutliers() >= 10;
+}
+
+bool Tracker::Relocalise() {
+  Frame& frame = *current_;
+  if (frame.size() < 50) return false;
+  // Candidates: keyframes with the most descriptor matches, most recent first on ties.
+  std::vector<KeyFrame*> keyframes = map_.KeyFrames();
+  std::reverse(keyframes.begin(), keyframes.end());
+  std::vector<std::pair<int, std::size_t>> scored;
+  std::vector<std::vector<MapPoint*>> all_matches(keyframes.size());
+  for (std::size_t k = 0; k < keyframes.size(); ++k) {
+    const int count = strict_matcher_.SearchByDescriptor(*keyframes[k], frame, all_matches[k]);
+    if (count >= 15) scored.emplace_back(count, k);
+  }
+  std::stable_sort(scored.begin(), scored.end(),
+                   [](const auto& a, const auto& b) { return a.first > b.first; });
+  if (static_cast<int>(scored.size()) > options_.relocalisation_candidates) {
+    scored.resize(static_cast<std::size_t>(options_.relocalisation_candidates));
+  }
+  const cv::Mat K = frame.features->camera().K();
+  for (const auto& [count, k] : scored) {
+    const std::vector<MapPoint*>& matches = all_matches[k];
+    std::vector<cv::Point3f> object;
+    std::vector<cv::Point2f> image;
+    std::vector<int> indices;
+    for (int i = 0; i < frame.size(); ++i) {
+      MapPoint* point = matches[static_cast<std::size_t>(i)];
+      if (point == nullptr || point->bad()) continue;
+      const Eigen::Vector3d& x = point->position();
+      object.emplace_back(static_cast<float>(x.x()), static_cast<float>(x.y()),
+                          static_cast<float>(x.z()));
+      const Eigen::Vector2d& u = frame.features->undistorted(i);
+      image.emplace_back(static_cast<float>(u.x()), static_cast<float>(u.y()));
+      indices.push_back(i);
+    }
+    if (object.size() < 15) continue;
+    cv::Mat rvec, tvec;
+    std::vector<int> inliers;
+    // A fixed seed state keeps RANSAC, and so the whole run, deterministic.
+    cv::theRNG().state = 0x12345678ULL + static_cast<std::uint64_t>(frame.id);
+    if (!cv::solvePnPRansac(object, image, K, cv::noArray(), rvec, tvec, false, 200, 4.0f, 0.99,
+                            inliers, cv::SOLVEPNP_EPNP) ||
+        inliers.size() < 10) {
+      continue;
+    }
+    cv::Mat rotation;
+    cv::Rodrigues(rvec, rotation);
+    Eigen::Matrix3d r;
+    cv::cv2eigen(rotation, r);
+    frame.pose_cw = geometry::Pose::Identity();
+    frame.pose_cw.linear() = r;
+    frame.pose_cw.translation() =
+        Eigen::Vector3d(tvec.at<double>(0), tvec.at<double>(1), tvec.at<double>(2));
+    std::fill(frame.map_points.begin(), frame.map_points.end(), nullptr);
+    for (int inlier : inliers) {
+      const int i = indices[static_cast<std::size_t>(inlier)];
+      frame.map_points[static_cast<std::size_t>(i)] = matches[static_cast<std::size_t>(i)];
+    }
+    int good = OptimizePose(frame, pyramid_, options_.bf);
+    if (good < 10) continue;
+    for (std::size_t i = 0; i < frame.map_points.size(); ++i) {
+      if (frame.outlier[i]) frame.map_points[i] = nullptr;
+    }
+    if (good < options_.min_inliers_after_relocalisation) {
+      std::vector<MapPoint*> found;
+      for (MapPoint* point : frame.map_points) {
+        if (point != nullptr) found.push_back(point);
+      }
+      const int more = strict_matcher_.SearchByProjection(frame, *keyframes[k], found, 10.0, 100);
+      if (good + more >= options_.min_inliers_after_relocalisation) {
+        good = OptimizePose(frame, pyramid_, options_.bf);
+        for (std::size_t i = 0; i < frame.map_points.size(); ++i) {
+          if (frame.outlier[i]) frame.map_points[i] = nullptr;
+        }
+      }
+    }
+    if (good >= options_.min_inliers_after_relocalisation) {
+      last_relocalisation_frame_id_ = frame.id;
+      reference_ = keyframes[k];
+      return true;
+    }
+  }
+  return false;
+}
+
+bool Tracker::InFrustum(MapPoint* point, double min_view_cos) const {
+  point->track_in_view = false;
+  const Frame& frame = *current_;
+  const Eigen::Vector3d in_camera = frame.pose_cw * point->position();
+  if (in_camera.z() <= 0.0) return false;
+  const Eigen::Vector2d pixel = frame.features->camera().Project(in_camera);
+  if (!frame.features->InBounds(pixel.x(), pixel.y())) return false;
+  const Eigen::Vector3d ray = point->position() - frame.CameraCentre();
+  const double distance = ray.norm();
+  if (distance < point->min_distance() || distance > point->max_distance()) return false;
+  const double view_cos = ray.dot(point->normal()) / distance;
+  if (view_cos < min_view_cos) return false;
+  point->track_in_view = true;
+  point->track_x = pixel.x();
+  point->track_y = pixel.y();
+  point->track_right_x = pixel.x() - options_.bf / in_camera.z();
+  point->track_level = point->PredictScale(distance, pyramid_);
+  point->track_view_cos = view_cos;
+  return true;
+}
+
+void Tracker::UpdateLocalMap() {
+  Frame& frame = *current_;
+  // Keyframes that see the frame's points, by how many.
+  std::map<KeyFrame*, int, KeyFrameIdLess> counts;
+  for (std::size_t i = 0; i < frame.map_points.size(); ++i) {
+    MapPoint* point = frame.map_points[i];
+    if (point == nullptr) continue;
+    if (point->bad()) {
+      frame.map_points[i] = nullptr;
+      continue;
+    }
+    for (const auto& [keyframe, index] : point->observations()) ++counts[keyframe];
+  }
+  if (counts.empty()) return;
+  local_keyframes_.clear();
+  std::set<KeyFrame*, KeyFrameIdLess> included;
+  KeyFrame* best = nullptr;
+  int best_count = 0;
+  for (const auto& [keyframe, count] : counts) {
+    if (keyframe->bad()) continue;
+    if (count > best_count) {
+      best_count = count;
+      best = keyframe;
+    }
+    local_keyframes_.push_back(keyframe);
+    included.insert(keyframe);
+  }
+  constexpr std::size_t kMaxLocalKeyFrames = 80;
+  const std::size_t first_ring = local_keyframes_.size();
+  for (std::size_t k = 0; k < first_ring && local_keyframes_.size() < kMaxLocalKeyFrames; ++k) {
+    for (KeyFrame* neighbour : local_keyframes_[k]->BestCovisibles(10)) {
+      if (included.insert(neighbour).second) {
+        local_keyframes_.push_back(neighbour);
+        break;
+      }
+    }
+  }
+  if (best != nullptr) reference_ = best;
+
+  local_points_.clear();
+  for (KeyFrame* keyframe : local_keyframes_) {
+    for (MapPoint* point : keyframe->map_points()) {
+      if (point == nullptr || point->bad() || point->local_map_frame == frame.id) continue;
+      point->local_map_frame = frame.id;
+      local_points_.push_back(point);
+    }
+  }
+}
+
+void Tracker::SearchLocalPoints() {
+  Frame& frame = *current_;
+  for (MapPoint* point : frame.map_points) {
+    if (point == nullptr || point->bad()) continue;
+    point->IncreaseVisible();
+    point->last_frame_seen = frame.id;
+    point->track_in_view = false;
+  }
+  int to_match = 0;
+  for (MapPoint* point : local_points_) {
+    if (point->last_frame_seen == frame.id || point->bad()) continue;
+    if (InFrustum(point, 0.5)) {
+      point->IncreaseVisible();
+      ++to_match;
+    }
+  }
+  if (to_match == 0) return;
+  // ORB-SLAM's RGB-D radius, wider right after relocalisation.
+  const double radius = frame.id < last_relocalisation_frame_id_ + 2 ? 5.0 : 3.0;
+  matcher_.SearchByProjection(frame, local_points_, radius);
+}
+
+bool Tracker::TrackLocalMap() {
+  UpdateLocalMap();
+  SearchLocalPoints();
+  Frame& frame = *current_;
+  OptimizePose(frame, pyramid_, options_.bf);
+  inliers_ = 0;
+  for (std::size_t i = 0; i < frame.map_points.size(); ++i) {
+    MapPoint* point = frame.map_points[i];
+    if (point == nullptr) continue;
+    if (!frame.outlier[i]) {
+      point->IncreaseFound();
+      if (point->num_observations() > 0) ++inliers_;
+    } else {
+      frame.map_points[i] = nullptr;
+      frame.outlier[i] = false;
+    }
+  }
+  if (frame.id < last_relocalisation_frame_id_ + options_.max_frames_between_keyframes &&
+      inliers_ < options_.min_inliers_after_relocalisation) {
+    return false;
+  }
+  return inliers_ >= options_.min_tracked_inliers;
+}
+
+bool Tracker::NeedNewKeyFrame() const {
+  const Frame& frame = *current_;
+  const int keyframes = map_.NumKeyFrames();
+  if (frame.id < last_relocalisation_frame_id_ + options_.max_frames_between_keyframes &&
+      keyframes > options_.max_frames_between_keyframes) {
+    return false;
+  }
+  const int min_observations = keyframes <= 2 ? 2 : 3;
+  const int reference_matches = reference_->TrackedMapPoints(min_observations);
+  int tracked_close = 0;
+  int untracked_close = 0;
+  for (int i = 0; i < frame.size(); ++i) {
+    const double depth = frame.features->depth(i);
+    if (depth <= 0.0 || depth > options_.close_depth_m) continue;
+    if (frame.map_points[static_cast<std::size_t>(i)] != nullptr &&
+        !frame.outlier[static_cast<std::size_t>(i)]) {
+      ++tracked_close;
+    } else {
+      ++untracked_close;
+    }
+  }
+  const bool need_close = tracked_close < 100 && untracked_close > 70;
+  const double ratio = keyframes < 2 ? 0.4 : 0.75;
+  // Mapping runs in line here, so it is always idle: ORB-SLAM's condition c1b always holds and
+  // a keyframe is made whenever the tracked points thin out (c2).
+  return (inliers_ < reference_matches * ratio || need_close) && inliers_ > 15;
+}
+
+void Tracker::CreateNewKeyFrame() {
+  Frame& frame = *current_;
+  KeyFrame* keyframe = map_.AddKeyFrame(frame);
+  // Points from depth: every close one, and at least the 100 nearest.
+  std::vector<std::pair<double, int>> by_depth;
+  for (int i = 0; i < frame.size(); ++i) {
+    if (frame.features->depth(i) > 0.0) by_depth.emplace_back(frame.features->depth(i), i);
+  }
+  std::sort(by_depth.begin(), by_depth.end());
+  int points = 0;
+  for (const auto& [depth, i] : by_depth) {
+    const auto index = static_cast<std::size_t>(i);
+    MapPoint* existing = frame.map_points[index];
+    if (existing == nullptr || existing->bad() || existing->num_observations() < 1 ||
+        frame.outlier[index]) {
+      MapPoint* point = map_.AddMapPoint(frame.Unproject(i), keyframe);
+      point->AddObservation(keyframe, i);
+      keyframe->SetMapPoint(i, point);
+      point->UpdateDescriptor();
+      point->UpdateNormalAndDepth(pyramid_);
+      frame.map_points[index] = point;
+      frame.outlier[index] = false;
+    }
+    ++points;
+    if (depth > options_.close_depth_m && points > 100) break;
+  }
+  for (int i = 0; i < frame.size(); ++i) {
+    MapPoint* point = frame.map_points[static_cast<std::size_t>(i)];
+    if (point != nullptr && keyframe->map_point(i) == nullptr &&
+        !frame.outlier[static_cast<std::size_t>(i)]) {
+      keyframe->SetMapPoint(i, point);
+    }
+  }
+  mapper_.ProcessKeyFrame(keyframe);
+  reference_ = last_keyframe_ = keyframe;
+  last_keyframe_frame_id_ = frame.id;
+  // Local bundle adjustment moved the keyframe: the frame keeps its pose relative to it.
+  frame.pose_cw = keyframe->pose_cw();
+}
+
+}  // namespace noctua::slam

@@ -1,0 +1,88 @@
+#pragma once
+
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "noctua/slam/frame.h"
+#include "noctua/slam/local_mapping.h"
+#include "noctua/slam/map.h"
+#include "noctua/slam/matcher.h"
+#include "noctua/slam/slam_options.h"
+
+namespace noctua::slam {
+
+enum class TrackingState { kNotInitialised, kOk, kLost };
+
+// How one frame went.
+struct TrackResult {
+  TrackingState state = TrackingState::kNotInitialised;
+  std::string method;  // "init", "motion", "reference", "relocalisation", "" when lost
+  int keypoints = 0;
+  int inliers = 0;
+  bool new_keyframe = false;
+  std::map<std::string, double> stage_ms;  // "track", "local_map", "mapping"
+};
+
+// Pose of a tracked frame relative to its reference keyframe (ORB-SLAM's convention), so that
+// later refinement of the keyframe moves the frame with it.
+struct FrameRecord {
+  long frame_id = 0;
+  double timestamp = 0.0;
+  const KeyFrame* reference = nullptr;  // nullptr: not tracked
+  geometry::Pose pose_c_r = geometry::Pose::Identity();
+};
+
+// ORB-SLAM2's RGB-D tracking: constant-velocity prediction and projection search, reference
+// keyframe matching when that fails, local map tracking, keyframe decision, relocalisation
+// (descriptor matching + PnP RANSAC) after loss. Single-threaded and deterministic.
+class Tracker {
+ public:
+  explicit Tracker(const SlamOptions& options);
+
+  TrackResult Track(Frame frame);
+
+  const Map& map() const { return map_; }
+  const std::vector<FrameRecord>& records() const { return records_; }
+  TrackingState state() const { return state_; }
+
+ private:
+  bool Initialise(Frame& frame);
+  bool TrackWithMotionModel();
+  bool TrackReferenceKeyFrame();
+  bool Relocalise();
+  bool TrackLocalMap();
+  void UpdateLastFrame();
+  void UpdateLocalMap();
+  void SearchLocalPoints();
+  bool InFrustum(MapPoint* point, double min_view_cos) const;
+  bool NeedNewKeyFrame() const;
+  void CreateNewKeyFrame();
+  int DiscardOutliers();
+  void ClearTemporaryPoints();
+
+  SlamOptions options_;
+  ScalePyramid pyramid_;
+  Map map_;
+  LocalMapper mapper_;
+  Matcher matcher_;         // ratio 0.9 (ORB-SLAM's tracking)
+  Matcher strict_matcher_;  // ratio 0.7 (reference keyframe, relocalisation)
+
+  TrackingState state_ = TrackingState::kNotInitialised;
+  std::unique_ptr<Frame> current_;
+  std::unique_ptr<Frame> last_;
+  std::optional<geometry::Pose> velocity_;
+  KeyFrame* reference_ = nullptr;
+  KeyFrame* last_keyframe_ = nullptr;
+  long last_keyframe_frame_id_ = 0;
+  long last_relocalisation_frame_id_ = -1000;
+  int inliers_ = 0;
+  std::vector<KeyFrame*> local_keyframes_;
+  std::vector<MapPoint*> local_points_;
+  std::vector<std::unique_ptr<MapPoint>> temporary_points_;  // visual odometry of the last frame
+  std::vector<FrameRecord> records_;
+};
+
+}  // namespace noctua::slam
