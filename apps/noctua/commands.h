@@ -14,5 +14,6 @@ void AddExtractCommand(CLI::App& app);
 void AddEdgesCommand(CLI::App& app);
 void AddAteCommand(CLI::App& app);
 void AddRpeCommand(CLI::App& app);
+void AddSlamCommand(CLI::App& app);
 
 }  // namespace noctua::app

@@ -21,6 +21,7 @@ int main(int argc, char** argv) {
   noctua::app::AddEdgesCommand(app);
   noctua::app::AddAteCommand(app);
   noctua::app::AddRpeCommand(app);
+  noctua::app::AddSlamCommand(app);
 
   try {
     app.parse(argc, argv);

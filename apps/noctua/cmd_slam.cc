@@ -1,0 +1,179 @@
+#include <cstdio>
+#include <iostream>
+#include <memory>
+#include <opencv2/core.hpp>
+#include <string>
+
+#include "commands.h"
+#include "method_options.h"
+#include "noctua/eval/trajectory_error.h"
+#include "noctua/eval/trajectory_plot.h"
+#include "noctua/eval/trajectory_report.h"
+#include "noctua/io/dataset.h"
+#include "noctua/slam/rgbd_slam.h"
+#include "noctua/util/error.h"
+#include "noctua/util/timer.h"
+#include "output_dir.h"
+
+namespace noctua::app {
+namespace {
+
+struct SlamArguments {
+  std::string dataset;
+  std::string out;
+  bool force = false;
+  int max_frames = 0;
+  double brightness = 1.0;
+  int progress_every = 20;
+  MethodFlags method;
+};
+
+const char* StateName(slam::TrackingState state) {
+  switch (state) {
+    case slam::TrackingState::kNotInitialised:
+      return "not-initialised";
+    case slam::TrackingState::kOk:
+      return "ok";
+    case slam::TrackingState::kLost:
+      return "lost";
+  }
+  return "unknown";
+}
+
+std::string FramesCsv(const slam::SequenceRun& run, const std::vector<std::string>& stages) {
+  std::string csv = "frame,timestamp,state,method,keypoints,inliers,keyframe";
+  for (const auto& stage : stages) csv += "," + stage + "_ms";
+  csv += "\n";
+  char buffer[128];
+  for (std::size_t i = 0; i < run.frames.size(); ++i) {
+    const slam::FrameOutcome& f = run.frames[i];
+    std::snprintf(buffer, sizeof(buffer), "%zu,%.6f,%s,%s,%d,%d,%d", i, f.timestamp,
+                  StateName(f.state), f.method.c_str(), f.keypoints, f.inliers,
+                  f.new_keyframe ? 1 : 0);
+    csv += buffer;
+    for (const auto& stage : stages) {
+      const auto found = f.stage_ms.find(stage);
+      std::snprintf(buffer, sizeof(buffer), ",%.3f",
+                    found == f.stage_ms.end() ? 0.0 : found->second);
+      csv += buffer;
+    }
+    csv += "\n";
+  }
+  return csv;
+}
+
+void RunSlam(const SlamArguments& args) {
+  CheckOption(args.brightness > 0.0 && args.brightness <= 1.0, "--brightness must be in (0, 1]");
+  CheckOption(args.max_frames >= 0, "--max-frames must not be negative");
+  if (args.method.config.empty()) throw Error("slam needs --config (a camera preset, see config/)");
+  const slam::SlamSetup setup = slam::LoadSlamSetup(args.method.config);
+  const pipeline::MethodConfig method_config = MethodConfigFromFlags(args.method);
+  const std::unique_ptr<pipeline::FeatureMethod> method =
+      pipeline::CreateMethod(args.method.method, method_config);
+  const io::Sequence sequence = io::Sequence::Open(args.dataset);
+  PrepareOutputDir(args.out, args.force);
+  const std::filesystem::path out = args.out;
+
+  slam::RunOptions run_options;
+  run_options.max_frames = args.max_frames;
+  const int every = std::max(1, args.progress_every);
+  run_options.progress = [every](int index, int count, const slam::FrameOutcome& outcome) {
+    if ((index + 1) % every != 0 && index + 1 != count) return;
+    const int width = 30;
+    const int filled = (index + 1) * width / count;
+    std::fprintf(stderr, "slam: [%s%s] %d/%d  %s, %d inliers\n", std::string(filled, '#').c_str(),
+                 std::string(width - filled, '.').c_str(), index + 1, count,
+                 StateName(outcome.state), outcome.inliers);
+  };
+  if (args.brightness < 1.0) {
+    const double factor = args.brightness;
+    run_options.transform_image = [factor](int, const cv::Mat& image) {
+      cv::Mat dark;
+      image.convertTo(dark, -1, factor);
+      return dark;
+    };
+  }
+  const slam::SequenceRun run =
+      slam::RunSequence(sequence, setup.camera.depth_factor, setup.camera.Camera(),
+                        method->feature2d(), setup.options, run_options);
+
+  WriteTextFileAtomically(out / "trajectory.txt", io::FormatTumTrajectory(run.trajectory));
+  const std::vector<std::string> stages = {"load",      "extract", "track",
+                                           "local_map", "mapping", "total"};
+  WriteTextFileAtomically(out / "frames.csv", FramesCsv(run, stages));
+
+  nlohmann::json report;
+  report["dataset"] = args.dataset;
+  report["config"] = args.method.config;
+  report["method"] = args.method.method;
+  report["brightness"] = args.brightness;
+  report["frames"] = run.frames.size();
+  report["tracked_frames"] = run.trajectory.size();
+  report["lost_frames"] = run.lost_frames.size();
+  report["lost_frame_indices"] = run.lost_frames;
+  report["keyframes"] = run.keyframes;
+  report["map_points"] = run.map_points;
+  std::string markdown = "| stage | median ms | max ms |\n|---|---|---|\n";
+  for (const auto& stage : stages) {
+    std::vector<double> samples;
+    for (const auto& frame : run.frames) {
+      const auto found = frame.stage_ms.find(stage);
+      if (found != frame.stage_ms.end()) samples.push_back(found->second);
+    }
+    const TimingSummary summary = Summarize(samples);
+    report["timing_ms"][stage] = {{"median", summary.median_ms}, {"max", summary.max_ms}};
+    char row[128];
+    std::snprintf(row, sizeof(row), "| %s | %.2f | %.2f |\n", stage.c_str(), summary.median_ms,
+                  summary.max_ms);
+    markdown += row;
+  }
+  char counts[256];
+  std::snprintf(counts, sizeof(counts),
+                "\nframes %zu, tracked %zu, lost %zu, keyframes %d, map points %d\n",
+                run.frames.size(), run.trajectory.size(), run.lost_frames.size(), run.keyframes,
+                run.map_points);
+  markdown += counts;
+  if (sequence.has_ground_truth() && run.trajectory.size() >= 3) {
+    const eval::AteResult ate = eval::ComputeAte(sequence.ground_truth(), run.trajectory);
+    report["ate"] = eval::ToJson(ate);
+    markdown += "\n" + eval::FormatAteMarkdown(ate);
+    eval::PlotAte(ate, out, "ate");
+    try {
+      const eval::RpeResult rpe = eval::ComputeRpe(sequence.ground_truth(), run.trajectory);
+      report["rpe"] = eval::ToJson(rpe);
+      markdown += eval::FormatRpeMarkdown(rpe, 1.0);
+      eval::PlotRpe(rpe, out, "rpe");
+    } catch (const Error& error) {
+      report["rpe"] = {{"error", error.what()}};
+    }
+  }
+  WriteTextFileAtomically(out / "report.json", report.dump(2) + "\n");
+  WriteTextFileAtomically(out / "report.md", markdown);
+  std::cout << markdown;
+  std::cerr << "slam: wrote trajectory.txt, frames.csv, report.json, report.md"
+            << (sequence.has_ground_truth() ? " and ATE/RPE plots" : "") << " in " << args.out
+            << "\n";
+}
+
+}  // namespace
+
+void AddSlamCommand(CLI::App& app) {
+  auto args = std::make_shared<SlamArguments>();
+  CLI::App* command = app.add_subcommand(
+      "slam", "RGB-D SLAM on a TUM or OpenLORIS sequence; TUM trajectory, timings, ATE/RPE");
+  command->add_option("-d,--dataset", args->dataset, "Sequence folder (TUM RGB-D or OpenLORIS)")
+      ->required();
+  AddMethodFlags(*command, args->method);
+  command->add_option("-o,--out", args->out, "Output folder")->required();
+  command->add_flag("--force", args->force, "Write into a non-empty output folder");
+  command->add_option("--max-frames", args->max_frames, "Stop after this many frames (0: all)");
+  command
+      ->add_option("--brightness", args->brightness,
+                   "Scale the grey values of every frame by this factor (a simple darkening)")
+      ->capture_default_str();
+  command->add_option("--progress-every", args->progress_every, "Frames per progress line")
+      ->capture_default_str();
+  command->callback([args] { RunSlam(*args); });
+}
+
+}  // namespace noctua::app
