@@ -51,6 +51,9 @@ struct Variant {
   // offsets at its finest scale (1.5 reduced pixels).
   float on_step;
   float on_line;
+  // Upper bound of the mean PC of pure noise: phasecongmono's arc-cosine measure lets a little
+  // more through than phasecong3's (measured 0.030 against < 0.02).
+  float noise_mean = 0.02f;
 };
 
 PhaseCongruency Reference(const cv::Mat& image) { return ComputePhaseCongruency(image); }
@@ -60,6 +63,12 @@ PhaseCongruency Fast(const cv::Mat& image) {
 PhaseCongruency FastFullResolution(const cv::Mat& image) {
   FastPhaseCongruencyOptions options;
   options.downscale = 1;
+  return FastPhaseCongruency(options).Compute(image);
+}
+
+PhaseCongruency FastArcCosine(const cv::Mat& image) {
+  FastPhaseCongruencyOptions options;
+  options.measure = FastPhaseCongruencyOptions::Measure::kArcCosine;
   return FastPhaseCongruency(options).Compute(image);
 }
 
@@ -194,15 +203,16 @@ TEST_P(BothVariants, PureNoiseGivesAlmostNoStrongPc) {
   const PhaseCongruency pc = GetParam().compute(image);
   // The Rayleigh noise threshold (k = 2) removes nearly all of the energy of noise.
   EXPECT_LT(cv::countNonZero(pc.max_moment > 0.2), static_cast<int>(0.01 * image.total()));
-  EXPECT_LT(cv::mean(pc.max_moment)[0], 0.02);
+  EXPECT_LT(cv::mean(pc.max_moment)[0], GetParam().noise_mean);
 }
 
-INSTANTIATE_TEST_SUITE_P(PhaseCongruency, BothVariants,
-                         ::testing::Values(Variant{"reference", &Reference, 0.65f, 0.35f},
-                                           Variant{"fast", &Fast, 0.45f, 0.55f},
-                                           Variant{"fast_full_resolution", &FastFullResolution,
-                                                   0.75f, 0.6f}),
-                         [](const auto& param_info) { return std::string(param_info.param.name); });
+INSTANTIATE_TEST_SUITE_P(
+    PhaseCongruency, BothVariants,
+    ::testing::Values(Variant{"reference", &Reference, 0.65f, 0.35f},
+                      Variant{"fast", &Fast, 0.45f, 0.55f},
+                      Variant{"fast_full_resolution", &FastFullResolution, 0.75f, 0.6f},
+                      Variant{"fast_arc_cosine", &FastArcCosine, 0.35f, 0.5f, 0.04f}),
+    [](const auto& param_info) { return std::string(param_info.param.name); });
 
 TEST(PhaseCongruency, TwoOrientationsGiveTheStepsOwnPc) {
   cv::Mat image(128, 128, CV_8U, cv::Scalar(60));
