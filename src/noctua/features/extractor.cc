@@ -195,7 +195,7 @@ Extraction Extractor::ExtractWithMask(const cv::Mat& image, const cv::Mat& featu
 
   if (descriptor_engine_) {
     TimeStage(stats, "rbrief",
-              [&] { descriptor_engine_->Compute(enhanced, out.keypoints, out.descriptors); });
+              [&] { descriptor_engine_->Compute(pyramid, out.keypoints, out.descriptors); });
     stats.stages_ran.push_back("rbrief");
   }
   stats.final_count = static_cast<int>(out.keypoints.size());

@@ -52,24 +52,51 @@ std::vector<cv::KeyPoint> DetectGridFast(const cv::Mat& level_image, int level,
   std::vector<int> count(static_cast<std::size_t>(cells_x * cells_y), 0);
   for (const auto& corner : corners) ++count[static_cast<std::size_t>(cell_of(corner.pt))];
 
-  std::vector<cv::KeyPoint> fallback;
-  for (int cy = 0; cy < cells_y; ++cy) {
-    for (int cx = 0; cx < cells_x; ++cx) {
-      if (count[static_cast<std::size_t>(cy * cells_x + cx)] > 0) continue;
-      const int x0 = inner.x + static_cast<int>(std::floor(cx * cell_w));
-      const int y0 = inner.y + static_cast<int>(std::floor(cy * cell_h));
-      const int x1 = inner.x + static_cast<int>(std::floor((cx + 1) * cell_w));
-      const int y1 = inner.y + static_cast<int>(std::floor((cy + 1) * cell_h));
-      const cv::Rect cell_search(x0 - kFastBorder, y0 - kFastBorder, x1 - x0 + 2 * kFastBorder,
-                                 y1 - y0 + 2 * kFastBorder);
-      cv::FAST(level_image(cell_search & search), fallback, options.min_fast_threshold, true);
-      const cv::Point2f offset((cell_search & search).tl());
-      for (auto& corner : fallback) {
-        corner.pt += offset;
-        // Keep only corners of this cell: the widened search overlaps the neighbours.
-        if (corner.pt.x >= x0 && corner.pt.x < x1 && corner.pt.y >= y0 && corner.pt.y < y1) {
-          corners.push_back(corner);
+  // Fallback for empty cells. Every cv::FAST call costs a fixed overhead, so consecutive empty
+  // cells of a row share one call; when most cells are empty, one pass over the level is cheaper.
+  // FAST scores do not depend on the threshold they were found at, so either way a cell gets
+  // exactly the corners it would get from its own call.
+  auto cell_rect = [&](int cx, int cy) {
+    const int x0 = inner.x + static_cast<int>(std::floor(static_cast<float>(cx) * cell_w));
+    const int y0 = inner.y + static_cast<int>(std::floor(static_cast<float>(cy) * cell_h));
+    const int x1 = inner.x + static_cast<int>(std::floor(static_cast<float>(cx + 1) * cell_w));
+    const int y1 = inner.y + static_cast<int>(std::floor(static_cast<float>(cy + 1) * cell_h));
+    return cv::Rect(x0, y0, x1 - x0, y1 - y0);
+  };
+  const auto empty_cells = std::count(count.begin(), count.end(), 0);
+  if (empty_cells == 0) {
+    // nothing to add
+  } else if (2 * empty_cells > static_cast<long>(count.size())) {
+    std::vector<cv::KeyPoint> weak;
+    cv::FAST(level_image(search), weak, options.min_fast_threshold, true);
+    for (auto& corner : weak) {
+      corner.pt += cv::Point2f(search.tl());
+      if (count[static_cast<std::size_t>(cell_of(corner.pt))] == 0) corners.push_back(corner);
+    }
+  } else {
+    std::vector<cv::KeyPoint> weak;
+    for (int cy = 0; cy < cells_y; ++cy) {
+      for (int cx = 0; cx < cells_x; ++cx) {
+        if (count[static_cast<std::size_t>(cy * cells_x + cx)] > 0) continue;
+        int run_end = cx;
+        while (run_end + 1 < cells_x &&
+               count[static_cast<std::size_t>(cy * cells_x + run_end + 1)] == 0) {
+          ++run_end;
         }
+        const cv::Rect run = cell_rect(cx, cy) | cell_rect(run_end, cy);
+        const cv::Rect run_search =
+            cv::Rect(run.x - kFastBorder, run.y - kFastBorder, run.width + 2 * kFastBorder,
+                     run.height + 2 * kFastBorder) &
+            search;
+        cv::FAST(level_image(run_search), weak, options.min_fast_threshold, true);
+        for (auto& corner : weak) {
+          corner.pt += cv::Point2f(run_search.tl());
+          // The widened search overlaps the neighbouring cells: keep only this run's corners.
+          if (run.contains(cv::Point(cvFloor(corner.pt.x), cvFloor(corner.pt.y)))) {
+            corners.push_back(corner);
+          }
+        }
+        cx = run_end;
       }
     }
   }

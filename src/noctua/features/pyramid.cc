@@ -22,7 +22,7 @@ ImagePyramid::ImagePyramid(const cv::Mat& gray, int num_levels, double scale_fac
     if (size.width < 1 || size.height < 1) break;
     scales_.push_back(scale);
     cv::Mat resized;
-    cv::resize(levels_.back(), resized, size, 0, 0, cv::INTER_LINEAR);
+    cv::resize(levels_.back(), resized, size, 0, 0, cv::INTER_LINEAR_EXACT);
     levels_.push_back(resized);
   }
 }

@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "noctua/features/extractor_options.h"
+#include "noctua/features/pyramid.h"
 
 namespace noctua::features {
 
@@ -15,13 +16,20 @@ class RbriefDescriber {
  public:
   explicit RbriefDescriber(const PyramidFastOptions& options);
 
-  // Keypoints in ORB-SLAM semantics (level-0 coordinates, octave, angle). Points too close to the
-  // border for a descriptor are removed and the rest are reordered by level, as OpenCV does.
+  // Keypoints in ORB-SLAM semantics (level-0 coordinates, octave, angle) on a pyramid built with
+  // the same scale factor. Each level is described on its own, so OpenCV does not rebuild the
+  // pyramid. Points too close to a border for a descriptor are removed and the rest are ordered
+  // by level, as OpenCV does.
+  void Compute(const ImagePyramid& pyramid, std::vector<cv::KeyPoint>& keypoints,
+               cv::Mat& descriptors) const;
+
+  // The same for keypoints without a pyramid at hand (builds one from `gray`).
   void Compute(const cv::Mat& gray, std::vector<cv::KeyPoint>& keypoints,
                cv::Mat& descriptors) const;
 
  private:
-  cv::Ptr<cv::ORB> orb_;
+  PyramidFastOptions options_;
+  cv::Ptr<cv::ORB> single_level_orb_;
 };
 
 }  // namespace noctua::features
