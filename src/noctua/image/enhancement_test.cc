@@ -18,6 +18,7 @@ TEST(Enhancer, ClaheAndHeRaiseContrastOfRealLowLightPhotos) {
   const cv::Mat dark = ToGray8U(noctua::testing::ReadImageOrThrow(
       noctua::testing::DataDir() / "lowlight" / "lol_low20" / "low" / "2.png", cv::IMREAD_COLOR));
   EnhancementOptions clahe;
+  clahe.clahe_clip_limit = 3.0;
   EnhancementOptions he;
   he.method = EnhancementMethod::kHistogramEqualization;
   // The photo is dark (mean grey ~20) with a few bright spots; both methods spread its grey
