@@ -38,7 +38,7 @@ class FrameFeatures {
     return undistorted_[static_cast<std::size_t>(i)];
   }
   double depth(int i) const { return depth_[static_cast<std::size_t>(i)]; }      // 0: none
-  double right_u(int i) const { return right_u_[static_cast<std::size_t>(i)]; }  // <0: none
+  double right_u(int i) const { return right_u_[static_cast<std::size_t>(i)]; }  // with depth only
   const uchar* descriptor(int i) const { return descriptors_.ptr<uchar>(i); }
   const cv::Mat& descriptors() const { return descriptors_; }
   const geometry::PinholeCamera& camera() const { return camera_; }

@@ -1,5 +1,8 @@
 #include "noctua/slam/local_mapping.h"
 
+#include <set>
+
+#include "noctua/slam/matcher.h"
 #include "noctua/slam/optimizer.h"
 
 namespace noctua::slam {
@@ -22,10 +25,95 @@ void LocalMapper::ProcessKeyFrame(KeyFrame* keyframe) {
   }
   keyframe->UpdateConnections();
   CullRecentPoints(keyframe);
+  if (options_.fuse_neighbours) FuseWithNeighbours(keyframe);
   if (options_.local_ba) {
     LocalBundleAdjustment(keyframe, pyramid_, options_.bf, options_.local_ba_iterations);
   }
   CullRedundantKeyFrames(keyframe);
+}
+
+void LocalMapper::Fuse(KeyFrame* keyframe, const std::vector<MapPoint*>& points, double radius) {
+  const FrameFeatures& features = keyframe->features();
+  const auto& camera = features.camera();
+  const Eigen::Vector3d centre = keyframe->CameraCentre();
+  for (MapPoint* point : points) {
+    if (point == nullptr || point->bad() || point->observations().count(keyframe) > 0) continue;
+    const Eigen::Vector3d in_camera = keyframe->pose_cw() * point->position();
+    if (in_camera.z() <= 0.0) continue;
+    const Eigen::Vector2d pixel = camera.Project(in_camera);
+    if (!features.InBounds(pixel.x(), pixel.y())) continue;
+    const Eigen::Vector3d ray = point->position() - centre;
+    const double distance = ray.norm();
+    if (distance < point->min_distance() || distance > point->max_distance()) continue;
+    if (ray.dot(point->normal()) < 0.5 * distance) continue;
+    const int level = point->PredictScale(distance, pyramid_);
+    const double window = radius * pyramid_.scale[static_cast<std::size_t>(level)];
+    const double right_x = pixel.x() - options_.bf / in_camera.z();
+    int best_distance = 256;
+    int best_index = -1;
+    for (int candidate : features.InArea(pixel.x(), pixel.y(), window)) {
+      const int candidate_level = features.octave(candidate);
+      if (candidate_level < level - 1 || candidate_level > level) continue;
+      const double ex = pixel.x() - features.undistorted(candidate).x();
+      const double ey = pixel.y() - features.undistorted(candidate).y();
+      double error2 = ex * ex + ey * ey;
+      double threshold = kChi2Mono;
+      if (features.depth(candidate) > 0.0) {
+        const double er = right_x - features.right_u(candidate);
+        error2 += er * er;
+        threshold = kChi2Stereo;
+      }
+      if (error2 * pyramid_.inverse_sigma2[static_cast<std::size_t>(candidate_level)] > threshold) {
+        continue;
+      }
+      const int d = DescriptorDistance(point->descriptor(), features.descriptor(candidate));
+      if (d < best_distance) {
+        best_distance = d;
+        best_index = candidate;
+      }
+    }
+    if (best_index < 0 || best_distance > Matcher::kThresholdLow) continue;
+    MapPoint* existing = keyframe->map_point(best_index);
+    if (existing != nullptr && !existing->bad()) {
+      if (existing->num_observations() > point->num_observations()) {
+        point->Replace(existing);
+      } else {
+        existing->Replace(point);
+      }
+    } else {
+      point->AddObservation(keyframe, best_index);
+      keyframe->SetMapPoint(best_index, point);
+    }
+  }
+}
+
+void LocalMapper::FuseWithNeighbours(KeyFrame* keyframe) {
+  std::vector<KeyFrame*> targets;
+  std::set<long> seen = {keyframe->id()};
+  for (KeyFrame* neighbour : keyframe->BestCovisibles(10)) {
+    if (neighbour->bad() || !seen.insert(neighbour->id()).second) continue;
+    targets.push_back(neighbour);
+    for (KeyFrame* second : neighbour->BestCovisibles(5)) {
+      if (!second->bad() && seen.insert(second->id()).second) targets.push_back(second);
+    }
+  }
+  for (KeyFrame* target : targets) Fuse(target, keyframe->map_points(), 3.0);
+  std::vector<MapPoint*> candidates;
+  std::set<long> added;
+  for (KeyFrame* target : targets) {
+    for (MapPoint* point : target->map_points()) {
+      if (point != nullptr && !point->bad() && added.insert(point->id()).second) {
+        candidates.push_back(point);
+      }
+    }
+  }
+  Fuse(keyframe, candidates, 3.0);
+  for (MapPoint* point : keyframe->map_points()) {
+    if (point == nullptr || point->bad()) continue;
+    point->UpdateDescriptor();
+    point->UpdateNormalAndDepth(pyramid_);
+  }
+  keyframe->UpdateConnections();
 }
 
 void LocalMapper::CullRecentPoints(const KeyFrame* keyframe) {

@@ -21,6 +21,11 @@ class LocalMapper {
  private:
   void CullRecentPoints(const KeyFrame* keyframe);
   void CullRedundantKeyFrames(KeyFrame* keyframe);
+  // ORB-SLAM's SearchInNeighbors: fuses the keyframe's points with those of its neighbours
+  // (duplicates merged, missing observations added), so points gather all their observations.
+  void FuseWithNeighbours(KeyFrame* keyframe);
+  // Projects `points` into `keyframe` and fuses each with the best matching keypoint.
+  void Fuse(KeyFrame* keyframe, const std::vector<MapPoint*>& points, double radius);
 
   const SlamOptions& options_;
   const ScalePyramid& pyramid_;

@@ -29,6 +29,31 @@ void MapPoint::SetBad() {
   observations_.clear();
 }
 
+void MapPoint::Replace(MapPoint* other) {
+  if (other == this || bad_ || other->bad()) return;
+  const auto observations = observations_;
+  observations_.clear();
+  bad_ = true;
+  replaced_by_ = other;
+  for (const auto& [keyframe, index] : observations) {
+    if (other->observations_.count(keyframe) == 0) {
+      keyframe->SetMapPoint(index, other);
+      other->AddObservation(keyframe, index);
+    } else {
+      keyframe->SetMapPoint(index, nullptr);
+    }
+  }
+  other->visible_ += visible_;
+  other->found_ += found_;
+  other->UpdateDescriptor();
+}
+
+MapPoint* MapPoint::replaced() const {
+  MapPoint* point = replaced_by_;
+  while (point != nullptr && point->replaced_by_ != nullptr) point = point->replaced_by_;
+  return point;
+}
+
 void MapPoint::UpdateDescriptor() {
   std::vector<const uchar*> descriptors;
   for (const auto& [keyframe, index] : observations_) {

@@ -42,6 +42,11 @@ class MapPoint {
   void EraseObservation(KeyFrame* keyframe);
   // Marks the point bad and removes it from every keyframe that observes it.
   void SetBad();
+  // Merges this point into `other` (a duplicate found by fusion): its observations move there
+  // where `other` has none in that keyframe, and this point becomes bad, pointing to `other`.
+  void Replace(MapPoint* other);
+  // The point that replaced this one, following the chain; nullptr when not replaced.
+  MapPoint* replaced() const;
 
   // The observation descriptor with the least median distance to the others (ORB-SLAM).
   void UpdateDescriptor();
@@ -76,6 +81,7 @@ class MapPoint {
   Eigen::Vector3d normal_ = Eigen::Vector3d::Zero();
   double min_distance_ = 0.0;
   double max_distance_ = 0.0;
+  MapPoint* replaced_by_ = nullptr;
   int visible_ = 1;
   int found_ = 1;
   bool bad_ = false;

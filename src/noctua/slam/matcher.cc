@@ -71,7 +71,7 @@ int Matcher::SearchByProjection(Frame& current, const Frame& last, double radius
     for (int candidate : candidates) {
       MapPoint* existing = current.map_points[static_cast<std::size_t>(candidate)];
       if (existing != nullptr && existing->num_observations() > 0) continue;
-      if (features.right_u(candidate) > 0.0 &&
+      if (features.depth(candidate) > 0.0 &&
           std::abs(right_x - features.right_u(candidate)) > window) {
         continue;
       }
@@ -116,7 +116,7 @@ int Matcher::SearchByProjection(Frame& frame, const std::vector<MapPoint*>& poin
     for (int candidate : candidates) {
       MapPoint* existing = frame.map_points[static_cast<std::size_t>(candidate)];
       if (existing != nullptr && existing->num_observations() > 0) continue;
-      if (features.right_u(candidate) > 0.0 &&
+      if (features.depth(candidate) > 0.0 &&
           std::abs(point->track_right_x - features.right_u(candidate)) > window) {
         continue;
       }

@@ -24,6 +24,7 @@ Intrinsics IntrinsicsOf(const FrameFeatures& features, double bf) {
 // keypoint has depth (a negative right coordinate: monocular residual).
 struct Observation {
   double u, v, right_u, inverse_sigma;
+  bool stereo;  // the keypoint has depth: three residuals
 };
 
 template <typename T>
@@ -72,7 +73,8 @@ struct FullCost {
 Observation ObservationOf(const FrameFeatures& features, int i, const ScalePyramid& pyramid) {
   const Eigen::Vector2d& pixel = features.undistorted(i);
   return {pixel.x(), pixel.y(), features.right_u(i),
-          std::sqrt(pyramid.inverse_sigma2[static_cast<std::size_t>(features.octave(i))])};
+          std::sqrt(pyramid.inverse_sigma2[static_cast<std::size_t>(features.octave(i))]),
+          features.depth(i) > 0.0};
 }
 
 // χ² of an observation (already weighted by the level variance) at a pose and point.
@@ -82,7 +84,7 @@ double Chi2(const Intrinsics& k, const Observation& o, const geometry::Pose& pos
   *behind = p.z() <= 0.0;
   if (*behind) return 1e12;
   double r[3] = {0, 0, 0};
-  Residuals(k, o, p, r, o.right_u >= 0.0);
+  Residuals(k, o, p, r, o.stereo);
   return r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
 }
 
@@ -146,7 +148,7 @@ int OptimizePose(Frame& frame, const ScalePyramid& pyramid, double bf) {
       if (frame.outlier[static_cast<std::size_t>(i)]) continue;
       const Observation o = ObservationOf(features, i, pyramid);
       const Eigen::Vector3d point = frame.map_points[static_cast<std::size_t>(i)]->position();
-      if (o.right_u >= 0.0) {
+      if (o.stereo) {
         problem.AddResidualBlock(new ceres::AutoDiffCostFunction<PoseOnlyCost<3>, 3, 4, 3>(
                                      new PoseOnlyCost<3>{k, o, point}),
                                  robust ? &huber_stereo : nullptr, block.rotation.data(),
@@ -170,7 +172,7 @@ int OptimizePose(Frame& frame, const ScalePyramid& pyramid, double bf) {
       bool behind = false;
       const double chi2 =
           Chi2(k, o, estimate, frame.map_points[static_cast<std::size_t>(i)]->position(), &behind);
-      const bool is_outlier = behind || chi2 > (o.right_u >= 0.0 ? kChi2Stereo : kChi2Mono);
+      const bool is_outlier = behind || chi2 > (o.stereo ? kChi2Stereo : kChi2Mono);
       frame.outlier[static_cast<std::size_t>(i)] = is_outlier;
       if (!is_outlier) ++inliers;
     }
@@ -237,7 +239,7 @@ void LocalBundleAdjustment(KeyFrame* keyframe, const ScalePyramid& pyramid, doub
       const Intrinsics k = IntrinsicsOf(observer->features(), bf);
       const Observation o = ObservationOf(observer->features(), index, pyramid);
       PoseBlock& block = poses.at(observer);
-      if (o.right_u >= 0.0) {
+      if (o.stereo) {
         problem.AddResidualBlock(
             new ceres::AutoDiffCostFunction<FullCost<3>, 3, 4, 3, 3>(new FullCost<3>{k, o}),
             &huber_stereo, block.rotation.data(), block.translation.data(), positions[p].data());
@@ -266,7 +268,7 @@ void LocalBundleAdjustment(KeyFrame* keyframe, const ScalePyramid& pyramid, doub
     bool behind = false;
     const double chi2 = Chi2(IntrinsicsOf(edge.keyframe->features(), bf), edge.observation,
                              edge.keyframe->pose_cw(), point->position(), &behind);
-    if (behind || chi2 > (edge.observation.right_u >= 0.0 ? kChi2Stereo : kChi2Mono)) {
+    if (behind || chi2 > (edge.observation.stereo ? kChi2Stereo : kChi2Mono)) {
       const int index = edge.keyframe->IndexOf(point);
       if (index >= 0) edge.keyframe->SetMapPoint(index, nullptr);
       point->EraseObservation(edge.keyframe);

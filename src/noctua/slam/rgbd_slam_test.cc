@@ -8,6 +8,8 @@
 #include <opencv2/features2d.hpp>
 
 #include "noctua/eval/trajectory_error.h"
+#include "noctua/features/extractor_config.h"
+#include "noctua/pipeline/method.h"
 #include "noctua/testing/shared_data.h"
 #include "noctua/util/error.h"
 
@@ -18,12 +20,11 @@ using ::testing::HasSubstr;
 
 const std::filesystem::path kConfigDir = std::filesystem::path(NOCTUA_SOURCE_DIR) / "config";
 
-// The ORB-SLAM-style ORB of OpenCV, with the preset's pyramid.
-cv::Ptr<cv::Feature2D> Orb(const SlamSetup& setup) {
-  return cv::ORB::create(setup.camera.orb.num_features,
-                         static_cast<float>(setup.camera.orb.scale_factor),
-                         setup.camera.orb.num_levels, 31, 0, 2, cv::ORB::HARRIS_SCORE, 31,
-                         setup.camera.orb.ini_th_fast);
+// noctua's ORB-SLAM-style ORB (the `orb` method) with the preset's extractor settings.
+cv::Ptr<cv::Feature2D> Orb(const SlamSetup&) {
+  pipeline::MethodConfig config;
+  config.extractor = features::LoadExtractorOptions(kConfigDir / "tum_fr1.yaml");
+  return pipeline::CreateMethod("orb", config)->feature2d();
 }
 
 class RgbdSlamTest : public ::testing::Test {
@@ -51,8 +52,8 @@ io::Sequence* RgbdSlamTest::sequence_ = nullptr;
 SlamSetup* RgbdSlamTest::setup_ = nullptr;
 
 // The first 100 frames of fr1/rpy (3.3 s of fast roll, pitch and yaw over a desk): every frame is
-// tracked and the error stays within a bound chosen from measurement (ATE RMSE 0.063 m with
-// OpenCV's ORB; bound 0.09 m) so that a regression in tracking or mapping shows.
+// tracked and the error stays within a bound chosen from measurement (ATE RMSE 0.020 m with the
+// `orb` method; bound 0.04 m) so that a regression in tracking or mapping shows.
 TEST_F(RgbdSlamTest, TracksEveryFrameOfTheFirst100OfFr1) {
   const SequenceRun run = Run(100);
   ASSERT_EQ(run.frames.size(), 100u);
@@ -61,7 +62,7 @@ TEST_F(RgbdSlamTest, TracksEveryFrameOfTheFirst100OfFr1) {
   EXPECT_GE(run.keyframes, 3);
   const eval::AteResult ate = eval::ComputeAte(sequence_->ground_truth(), run.trajectory);
   EXPECT_EQ(ate.translation_m.count, 100);
-  EXPECT_LT(ate.translation_m.rmse, 0.09);
+  EXPECT_LT(ate.translation_m.rmse, 0.04);
   // Tracking is deterministic: a second run gives the same trajectory.
   const SequenceRun again = Run(30);
   const SequenceRun first = Run(30);

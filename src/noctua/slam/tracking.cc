@@ -139,6 +139,9 @@ void Tracker::UpdateLastFrame() {
   }
   // ORB-SLAM's RGB-D visual odometry: close depth points of the last frame that are not in the
   // map become temporary points, which keeps the motion model matching in fast motion.
+  for (MapPoint*& point : last_->map_points) {
+    if (point != nullptr && point->bad() && point->replaced() != nullptr) point = point->replaced();
+  }
   std::vector<std::pair<double, int>> by_depth;
   for (int i = 0; i < last_->size(); ++i) {
     if (last_->features->depth(i) > 0.0) by_depth.emplace_back(last_->features->depth(i), i);
