@@ -1,6 +1,11 @@
 #include "noctua/features/extractor.h"
 
+#include <array>
+#include <functional>
+#include <future>
+#include <opencv2/core/utility.hpp>
 #include <opencv2/imgproc.hpp>
+#include <optional>
 #include <string>
 
 #include "noctua/features/filters.h"
@@ -26,12 +31,6 @@ void CheckSameSizeMask(const cv::Mat& map, const cv::Size& size, const char* wha
                 std::to_string(map.rows) + " but the image is " + std::to_string(size.width) + "x" +
                 std::to_string(size.height));
   }
-}
-
-int CountAll(const std::vector<std::vector<cv::KeyPoint>>& levels) {
-  std::size_t count = 0;
-  for (const auto& level : levels) count += level.size();
-  return static_cast<int>(count);
 }
 
 // Runs one stage on every level and records its time under `name`.
@@ -83,120 +82,171 @@ Extraction Extractor::ExtractWithMask(const cv::Mat& image, const cv::Mat& featu
   TimeStage(stats, "enhance", [&] { enhanced = enhancer_.Apply(gray); });
   stats.stages_ran.push_back("enhance:" + image::ToString(options_.enhancement.method));
 
-  // Maps for the filters: given explicitly, or made by the configured sources.
-  cv::Mat dynamic_mask = dynamic_mask_in;
-  if (options_.dynamic_filter.enabled && dynamic_mask.empty() && dynamic_source_) {
-    TimeStage(stats, "dynamic-mask", [&] { dynamic_mask = dynamic_source_(image); });
-    CheckSameSizeMask(dynamic_mask, gray.size(), "dynamic mask from the detector");
-  }
-  cv::Mat edge_map = edge_map_in;
-  if (options_.edge_filter.enabled && edge_map.empty() && edge_source_) {
-    TimeStage(stats, "edge-map", [&] { edge_map = edge_source_(enhanced); });
-    CheckSameSizeMask(edge_map, gray.size(), "edge map from the edge detector");
-  }
+  // The edge map and the dynamic mask are the slow stages and need nothing from the pyramid:
+  // they run on their own threads while the pyramid and FAST run here.
+  const bool make_dynamic =
+      options_.dynamic_filter.enabled && dynamic_mask_in.empty() && dynamic_source_;
+  const bool make_edges = options_.edge_filter.enabled && edge_map_in.empty() && edge_source_;
+  auto timed_async = [&](auto&& source, const cv::Mat& input) {
+    return std::async(options_.parallel ? std::launch::async : std::launch::deferred,
+                      [&source, input] {
+                        Stopwatch watch;
+                        cv::Mat map = source(input);
+                        return std::make_pair(map, watch.ElapsedMs());
+                      });
+  };
+  std::future<std::pair<cv::Mat, double>> dynamic_future;
+  std::future<std::pair<cv::Mat, double>> edge_future;
+  if (make_dynamic) dynamic_future = timed_async(dynamic_source_, image);
+  if (make_edges) edge_future = timed_async(edge_source_, enhanced);
 
   const PyramidFastOptions& fast = options_.fast;
-  ImagePyramid pyramid = [&] {
-    Stopwatch watch;
-    ImagePyramid built(enhanced, fast.num_levels, fast.scale_factor);
-    stats.stage_ms["pyramid"] += watch.ElapsedMs();
-    return built;
-  }();
+  std::optional<ImagePyramid> pyramid;
+  TimeStage(stats, "pyramid",
+            [&] { pyramid.emplace(enhanced, fast.num_levels, fast.scale_factor); });
+  const int num_levels = pyramid->num_levels();
 
-  std::vector<std::vector<cv::KeyPoint>> levels(static_cast<std::size_t>(pyramid.num_levels()));
-  TimeStage(stats, "fast", [&] {
-    for (int l = 0; l < pyramid.num_levels(); ++l) {
-      levels[static_cast<std::size_t>(l)] = DetectGridFast(pyramid.level(l), l, fast);
+  // Everything after the pyramid is independent per level; each level keeps its own points,
+  // counts and stage times, merged in level order afterwards, so results do not depend on
+  // how many threads ran.
+  struct LevelWork {
+    std::vector<cv::KeyPoint> points;
+    std::array<int, 5> counts{};  // detected, after mask, dynamic, edge, nms
+    std::map<std::string, double> stage_ms;
+    cv::Mat descriptors;
+  };
+  std::vector<LevelWork> work(static_cast<std::size_t>(num_levels));
+  auto for_each_level = [&](const std::function<void(LevelWork&, int)>& fn) {
+    auto body = [&](const cv::Range& range) {
+      for (int l = range.start; l < range.end; ++l) fn(work[static_cast<std::size_t>(l)], l);
+    };
+    if (options_.parallel) {
+      cv::parallel_for_(cv::Range(0, num_levels), body);
+    } else {
+      body(cv::Range(0, num_levels));
     }
-  });
-  stats.stages_ran.push_back("ofast");
-  stats.detected = CountAll(levels);
-
-  auto for_each_level = [&](auto&& fn) {
-    for (int l = 0; l < pyramid.num_levels(); ++l) fn(levels[static_cast<std::size_t>(l)], l);
+  };
+  auto timed = [](LevelWork& level, const char* name, auto&& fn) {
+    Stopwatch watch;
+    fn();
+    level.stage_ms[name] += watch.ElapsedMs();
   };
 
-  if (!feature2d_mask.empty()) {
-    TimeStage(stats, "mask-filter", [&] {
-      for_each_level([&](auto& points, int l) {
-        FilterByMask(points, pyramid.scale(l), feature2d_mask, /*drop_where_set=*/false);
+  for_each_level([&](LevelWork& level, int l) {
+    timed(level, "fast", [&] { level.points = DetectGridFast(pyramid->level(l), l, fast); });
+    level.counts[0] = static_cast<int>(level.points.size());
+    if (!feature2d_mask.empty()) {
+      timed(level, "mask-filter", [&] {
+        FilterByMask(level.points, pyramid->scale(l), feature2d_mask, /*drop_where_set=*/false);
       });
-    });
-  }
-  stats.after_mask = CountAll(levels);
+    }
+    level.counts[1] = static_cast<int>(level.points.size());
+  });
+  stats.stages_ran.push_back("ofast");
 
+  cv::Mat dynamic_mask = dynamic_mask_in;
+  if (make_dynamic) {
+    auto [map, ms] = dynamic_future.get();
+    stats.stage_ms["dynamic-mask"] += ms;
+    CheckSameSizeMask(map, gray.size(), "dynamic mask from the detector");
+    dynamic_mask = map;
+  }
+  cv::Mat edge_map = edge_map_in;
+  if (make_edges) {
+    auto [map, ms] = edge_future.get();
+    stats.stage_ms["edge-map"] += ms;
+    CheckSameSizeMask(map, gray.size(), "edge map from the edge detector");
+    edge_map = map;
+  }
+
+  const bool dynamic_on = options_.dynamic_filter.enabled && !dynamic_mask.empty();
   if (!options_.dynamic_filter.enabled) {
     stats.stages_skipped.push_back("dynamic-filter (disabled)");
-  } else if (dynamic_mask.empty()) {
+  } else if (!dynamic_on) {
     stats.stages_skipped.push_back("dynamic-filter (no dynamic mask or detector)");
   } else {
-    TimeStage(stats, "dynamic-filter", [&] {
-      for_each_level([&](auto& points, int l) {
-        FilterByMask(points, pyramid.scale(l), dynamic_mask, /*drop_where_set=*/true);
-      });
-    });
     stats.stages_ran.push_back("dynamic-filter");
   }
-  stats.after_dynamic = CountAll(levels);
-
+  const bool edge_on = options_.edge_filter.enabled && !edge_map.empty();
   if (!options_.edge_filter.enabled) {
     stats.stages_skipped.push_back("edge-filter (disabled)");
-  } else if (edge_map.empty()) {
+  } else if (!edge_on) {
     stats.stages_skipped.push_back("edge-filter (no edge map or edge detector)");
   } else {
-    TimeStage(stats, "edge-filter", [&] {
-      const cv::Mat distance = DistanceToEdges(edge_map);
-      for_each_level([&](auto& points, int l) {
-        FilterByEdgeDistance(points, pyramid.scale(l), distance, options_.edge_filter.radius_px);
-      });
-    });
     stats.stages_ran.push_back("edge-filter");
   }
-  stats.after_edge = CountAll(levels);
-
-  if (!options_.nms_filter.enabled) {
-    stats.stages_skipped.push_back("nms-filter (disabled)");
-  } else {
-    TimeStage(stats, "nms-filter", [&] {
-      for_each_level([&](auto& points, int l) {
-        SuppressNonMaxima(points, pyramid.level(l).size(), options_.nms_filter.window);
-      });
-    });
+  if (options_.nms_filter.enabled) {
     stats.stages_ran.push_back("nms-filter");
+  } else {
+    stats.stages_skipped.push_back("nms-filter (disabled)");
   }
-  stats.after_nms = CountAll(levels);
+  cv::Mat distance_to_edges;
+  if (edge_on)
+    TimeStage(stats, "edge-filter", [&] { distance_to_edges = DistanceToEdges(edge_map); });
 
-  // Spread the survivors over each level, orient them, and move them to level-0 coordinates.
-  const std::vector<int> wanted = FeaturesPerLevel(fast, pyramid.num_levels());
-  TimeStage(stats, "distribute", [&] {
-    for_each_level([&](auto& points, int l) {
-      const cv::Mat& level_image = pyramid.level(l);
+  const std::vector<int> wanted = FeaturesPerLevel(fast, num_levels);
+  for_each_level([&](LevelWork& level, int l) {
+    auto& points = level.points;
+    const double scale = pyramid->scale(l);
+    if (dynamic_on) {
+      timed(level, "dynamic-filter",
+            [&] { FilterByMask(points, scale, dynamic_mask, /*drop_where_set=*/true); });
+    }
+    level.counts[2] = static_cast<int>(points.size());
+    if (edge_on) {
+      timed(level, "edge-filter", [&] {
+        FilterByEdgeDistance(points, scale, distance_to_edges, options_.edge_filter.radius_px);
+      });
+    }
+    level.counts[3] = static_cast<int>(points.size());
+    if (options_.nms_filter.enabled) {
+      timed(level, "nms-filter", [&] {
+        SuppressNonMaxima(points, pyramid->level(l).size(), options_.nms_filter.window);
+      });
+    }
+    level.counts[4] = static_cast<int>(points.size());
+    const cv::Mat& level_image = pyramid->level(l);
+    timed(level, "distribute", [&] {
       const cv::Rect2f bounds(static_cast<float>(kEdgeThreshold),
                               static_cast<float>(kEdgeThreshold),
                               static_cast<float>(level_image.cols - 2 * kEdgeThreshold),
                               static_cast<float>(level_image.rows - 2 * kEdgeThreshold));
       points = DistributeOverImage(points, bounds, wanted[static_cast<std::size_t>(l)]);
     });
-  });
-  TimeStage(stats, "orientation", [&] {
-    for_each_level([&](auto& points, int l) {
-      ComputeOrientation(pyramid.level(l), points);
-      const auto scale = static_cast<float>(pyramid.scale(l));
+    timed(level, "orientation", [&] {
+      ComputeOrientation(level_image, points);
       for (auto& point : points) {
-        point.pt *= scale;
-        point.size = static_cast<float>(kPatchSize) * scale;
+        point.pt *= static_cast<float>(scale);
+        point.size = static_cast<float>(kPatchSize * scale);
       }
     });
+    if (descriptor_engine_) {
+      timed(level, "rbrief",
+            [&] { descriptor_engine_->ComputeLevel(*pyramid, l, points, level.descriptors); });
+    }
   });
   stats.stages_ran.push_back("orientation");
-  for (auto& level : levels) {
-    out.keypoints.insert(out.keypoints.end(), level.begin(), level.end());
-  }
+  if (descriptor_engine_) stats.stages_ran.push_back("rbrief");
 
+  // Merge in level order. Stage times of the per-level stages are summed over levels (thread
+  // time); total_ms is wall time.
+  std::vector<cv::Mat> descriptor_rows;
+  for (auto& level : work) {
+    stats.detected += level.counts[0];
+    stats.after_mask += level.counts[1];
+    stats.after_dynamic += level.counts[2];
+    stats.after_edge += level.counts[3];
+    stats.after_nms += level.counts[4];
+    for (const auto& [name, ms] : level.stage_ms) stats.stage_ms[name] += ms;
+    out.keypoints.insert(out.keypoints.end(), level.points.begin(), level.points.end());
+    if (!level.descriptors.empty()) descriptor_rows.push_back(level.descriptors);
+  }
   if (descriptor_engine_) {
-    TimeStage(stats, "rbrief",
-              [&] { descriptor_engine_->Compute(pyramid, out.keypoints, out.descriptors); });
-    stats.stages_ran.push_back("rbrief");
+    if (descriptor_rows.empty()) {
+      out.descriptors = cv::Mat(0, 32, CV_8UC1);
+    } else {
+      cv::vconcat(descriptor_rows, out.descriptors);
+    }
   }
   stats.final_count = static_cast<int>(out.keypoints.size());
   stats.total_ms = total.ElapsedMs();

@@ -30,7 +30,7 @@ ExtractorOptions ExtractorOptionsFromYaml(const YAML::Node& root, const std::str
     static const std::set<std::string> kKnown = {
         "enhancement", "clahe_clip_limit", "clahe_tiles_x", "clahe_tiles_y",
         "cell_size",   "dynamic_filter",   "edge_filter",   "edge_radius_px",
-        "nms_filter",  "nms_window",       "descriptors"};
+        "nms_filter",  "nms_window",       "descriptors",   "parallel"};
     for (const auto& entry : section) {
       const auto key = entry.first.as<std::string>();
       if (!kKnown.contains(key)) {
@@ -56,6 +56,7 @@ ExtractorOptions ExtractorOptionsFromYaml(const YAML::Node& root, const std::str
     ReadSetting(section, "nms_filter", source, options.nms_filter.enabled);
     ReadSetting(section, "nms_window", source, options.nms_filter.window);
     ReadSetting(section, "descriptors", source, options.compute_descriptors);
+    ReadSetting(section, "parallel", source, options.parallel);
   }
   try {
     options.Check();

@@ -50,6 +50,9 @@ struct ExtractorOptions {
   EdgeFilterOptions edge_filter;
   NmsFilterOptions nms_filter;
   bool compute_descriptors = true;  // false: keypoints only (the FAST baseline)
+  // Pyramid levels on OpenCV's thread pool, edge map and dynamic mask on their own threads.
+  // Results are identical either way; false keeps everything on the calling thread.
+  bool parallel = true;
 
   // Throws noctua::Error naming the first invalid field.
   void Check() const;

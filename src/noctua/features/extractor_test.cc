@@ -286,6 +286,32 @@ TEST(Extractor, NoTwoSurvivorsShareAnNmsWindow) {
   }
 }
 
+TEST(Extractor, ParallelAndSequentialRunsGiveIdenticalResults) {
+  const cv::Mat frame =
+      noctua::testing::ReadImageOrThrow(noctua::testing::Fr1RgbPaths(1)[0], cv::IMREAD_COLOR);
+  ExtractorOptions options;
+  options.parallel = false;
+  Extractor sequential(options);
+  options.parallel = true;
+  Extractor parallel(options);
+  cv::Mat edges(frame.size(), CV_8UC1, cv::Scalar(0));
+  for (int x = 20; x < frame.cols; x += 25) edges.col(x).setTo(255);
+  parallel.SetEdgeMapSource([&](const cv::Mat&) { return edges; });
+  sequential.SetEdgeMapSource([&](const cv::Mat&) { return edges; });
+  for (int run = 0; run < 3; ++run) {
+    const Extraction a = sequential.Extract(frame);
+    const Extraction b = parallel.Extract(frame);
+    ASSERT_EQ(a.keypoints.size(), b.keypoints.size());
+    for (std::size_t i = 0; i < a.keypoints.size(); ++i) {
+      EXPECT_EQ(a.keypoints[i].pt, b.keypoints[i].pt);
+      EXPECT_EQ(a.keypoints[i].angle, b.keypoints[i].angle);
+      EXPECT_EQ(a.keypoints[i].octave, b.keypoints[i].octave);
+    }
+    EXPECT_EQ(cv::norm(a.descriptors, b.descriptors, cv::NORM_HAMMING), 0.0);
+    EXPECT_EQ(a.stats.after_edge, b.stats.after_edge);
+  }
+}
+
 std::string ErrorOf(const std::function<void()>& fn) {
   try {
     fn();

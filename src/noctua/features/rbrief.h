@@ -23,13 +23,19 @@ class RbriefDescriber {
   void Compute(const ImagePyramid& pyramid, std::vector<cv::KeyPoint>& keypoints,
                cv::Mat& descriptors) const;
 
+  // Describes the points of one level (level-0 coordinates, all of octave `level`); points too
+  // close to the border are removed. Safe to call for different levels at the same time.
+  void ComputeLevel(const ImagePyramid& pyramid, int level, std::vector<cv::KeyPoint>& keypoints,
+                    cv::Mat& descriptors) const;
+
   // The same for keypoints without a pyramid at hand (builds one from `gray`).
   void Compute(const cv::Mat& gray, std::vector<cv::KeyPoint>& keypoints,
                cv::Mat& descriptors) const;
 
  private:
   PyramidFastOptions options_;
-  cv::Ptr<cv::ORB> single_level_orb_;
+  // One single-level ORB per pyramid level, so that levels can be described concurrently.
+  std::vector<cv::Ptr<cv::ORB>> single_level_orbs_;
 };
 
 }  // namespace noctua::features
