@@ -49,7 +49,15 @@ std::vector<TimedFile> ReadTimedFileList(const fs::path& path) {
           path, line.number,
           "expected 'timestamp file', found " + std::to_string(line.fields.size()) + " fields");
     }
-    files.push_back({ParseNumber(path, line.number, line.fields[0]), line.fields[1], line.number});
+    const double timestamp = ParseNumber(path, line.number, line.fields[0]);
+    // A list out of time order or with a repeated time is a damaged list, not something to
+    // reorder silently.
+    if (!files.empty() && !(timestamp > files.back().timestamp)) {
+      ThrowLineError(path, line.number,
+                     "timestamp does not increase (line " + std::to_string(files.back().line) +
+                         " before it is at the same time or later)");
+    }
+    files.push_back({timestamp, line.fields[1], line.number});
   }
   return files;
 }
@@ -193,6 +201,17 @@ FrameImages Sequence::Load(const Frame& frame, double depth_factor) const {
                                          std::to_string(images.bgr.rows));
   }
   images.depth_m = DepthToMetres(depth16, depth_factor);
+  // RGB-D sensors measure up to ~10 m; a mean beyond kMaxPlausibleDepthM means DepthMapFactor
+  // does not fit the data (e.g. 1 for millimetre depth) and every 3-D point would be wrong.
+  constexpr double kMaxPlausibleDepthM = 100.0;
+  const cv::Scalar mean = cv::mean(images.depth_m, depth16 > 0);
+  if (mean[0] > kMaxPlausibleDepthM) {
+    ThrowFileError(frame.depth_path, "mean depth " + std::to_string(mean[0]) +
+                                         " m is implausible: DepthMapFactor " +
+                                         std::to_string(depth_factor) +
+                                         " does not fit this depth image (TUM: 5000, "
+                                         "OpenLORIS: 1000)");
+  }
   return images;
 }
 

@@ -1,5 +1,8 @@
 #include "noctua/io/image_file.h"
 
+#include <algorithm>
+#include <cctype>
+#include <fstream>
 #include <opencv2/imgcodecs.hpp>
 #include <string>
 
@@ -29,11 +32,36 @@ std::string DepthName(int depth) {
   }
 }
 
+// libjpeg decodes a truncated JPEG with only a warning and fills the missing rows with grey, which
+// would be a silently wrong image: a complete JPEG ends with the EOI marker (FF D9).
+bool IsTruncatedJpeg(const std::filesystem::path& path) {
+  std::string extension = path.extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (extension != ".jpg" && extension != ".jpeg") return false;
+  std::ifstream in(path, std::ios::binary | std::ios::ate);
+  if (!in || in.tellg() < 4) return true;
+  // Some writers pad after EOI; look for it among the last bytes.
+  const std::streamoff tail = std::min<std::streamoff>(in.tellg(), 64);
+  in.seekg(-tail, std::ios::end);
+  std::string bytes(static_cast<std::size_t>(tail), '\0');
+  in.read(bytes.data(), tail);
+  return bytes.find("\xFF\xD9") == std::string::npos;
+}
+
 cv::Mat ReadUnchanged(const std::filesystem::path& path) {
   std::error_code error;
   if (!std::filesystem::exists(path, error)) ThrowFileError(path, "no such file");
   if (std::filesystem::is_directory(path, error)) ThrowFileError(path, "is a folder, not an image");
-  cv::Mat image = cv::imread(path.string(), cv::IMREAD_UNCHANGED);
+  if (std::filesystem::is_regular_file(path, error) && std::filesystem::file_size(path, error) == 0)
+    ThrowFileError(path, "is empty (0 bytes), not an image");
+  if (IsTruncatedJpeg(path)) ThrowFileError(path, "truncated JPEG (no end-of-image marker)");
+  cv::Mat image;
+  try {
+    image = cv::imread(path.string(), cv::IMREAD_UNCHANGED);
+  } catch (const cv::Exception& exception) {
+    ThrowFileError(path, std::string("cannot decode the image: ") + exception.what());
+  }
   if (image.empty())
     ThrowFileError(path, "cannot decode the image (corrupt, truncated or not an image)");
   return image;

@@ -10,6 +10,9 @@
 #include "noctua/util/error.h"
 
 namespace noctua::io {
+namespace {
+constexpr double kQuaternionNormTolerance = 1e-2;
+}  // namespace
 
 Trajectory::Trajectory(std::vector<StampedPose> poses) : poses_(std::move(poses)) {
   for (std::size_t i = 1; i < poses_.size(); ++i) {
@@ -39,6 +42,12 @@ Trajectory ReadTumTrajectory(const std::filesystem::path& path) {
     const std::vector<double> values = ParseNumbers(path, line, 8);
     const Eigen::Quaterniond rotation(values[7], values[4], values[5], values[6]);
     if (rotation.norm() < 1e-6) ThrowLineError(path, line.number, "quaternion has zero length");
+    // Files carry 4-7 decimals, so unit quaternions are off by ~1e-4 at most; a larger error
+    // means the values are not a rotation (e.g. swapped columns) rather than rounding.
+    if (std::abs(rotation.norm() - 1.0) > kQuaternionNormTolerance) {
+      ThrowLineError(path, line.number,
+                     "quaternion is not normalised (norm " + std::to_string(rotation.norm()) + ")");
+    }
     if (!poses.empty() && !(values[0] > poses.back().timestamp)) {
       ThrowLineError(path, line.number, "timestamp does not increase");
     }
