@@ -1,3 +1,4 @@
+#include <csignal>
 #include <cstdio>
 #include <iostream>
 #include <memory>
@@ -17,6 +18,30 @@
 
 namespace noctua::app {
 namespace {
+
+// Set by SIGINT (Ctrl-C): the run stops before the next frame and writes what it has.
+volatile std::sig_atomic_t g_interrupted = 0;
+
+void OnInterrupt(int) {
+  g_interrupted = 1;
+  // A second Ctrl-C kills the process the usual way.
+  std::signal(SIGINT, SIG_DFL);
+}
+
+// Installs OnInterrupt for the lifetime of the run and restores the previous handler after.
+class InterruptGuard {
+ public:
+  InterruptGuard() {
+    g_interrupted = 0;
+    previous_ = std::signal(SIGINT, OnInterrupt);
+  }
+  ~InterruptGuard() { std::signal(SIGINT, previous_); }
+  InterruptGuard(const InterruptGuard&) = delete;
+  InterruptGuard& operator=(const InterruptGuard&) = delete;
+
+ private:
+  void (*previous_)(int) = SIG_DFL;
+};
 
 struct SlamArguments {
   std::string dataset;
@@ -93,6 +118,8 @@ void RunSlam(const SlamArguments& args) {
       return dark;
     };
   }
+  InterruptGuard interrupt_guard;
+  run_options.stop = [] { return g_interrupted != 0; };
   const slam::SequenceRun run =
       slam::RunSequence(sequence, setup.camera.depth_factor, setup.camera.Camera(),
                         method->feature2d(), setup.options, run_options);
@@ -113,6 +140,7 @@ void RunSlam(const SlamArguments& args) {
   report["lost_frame_indices"] = run.lost_frames;
   report["keyframes"] = run.keyframes;
   report["map_points"] = run.map_points;
+  report["interrupted"] = run.interrupted;
   std::string markdown = "| stage | median ms | max ms |\n|---|---|---|\n";
   for (const auto& stage : stages) {
     std::vector<double> samples;
@@ -153,6 +181,12 @@ void RunSlam(const SlamArguments& args) {
   std::cerr << "slam: wrote trajectory.txt, frames.csv, report.json, report.md"
             << (sequence.has_ground_truth() ? " and ATE/RPE plots" : "") << " in " << args.out
             << "\n";
+  if (run.interrupted) {
+    throw Error("interrupted (Ctrl-C) after " + std::to_string(run.frames.size()) + " of " +
+                std::to_string(sequence.size()) + " frames; " + (out / "trajectory.txt").string() +
+                " holds the " + std::to_string(run.trajectory.size()) +
+                " poses tracked so far, complete and intact");
+  }
 }
 
 }  // namespace

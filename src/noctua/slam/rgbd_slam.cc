@@ -55,6 +55,10 @@ SequenceRun RunSequence(const io::Sequence& sequence, double depth_factor,
   SequenceRun run;
   bool started = false;
   for (int i = 0; i < count; ++i) {
+    if (run_options.stop && run_options.stop()) {
+      run.interrupted = true;
+      break;
+    }
     Stopwatch total;
     const io::Frame& frame = sequence.frame(static_cast<std::size_t>(i));
     io::FrameImages images = sequence.Load(frame, depth_factor);

@@ -56,6 +56,7 @@ struct SequenceRun {
   std::vector<int> lost_frames;  // indices of frames not tracked after the map was started
   int keyframes = 0;
   int map_points = 0;
+  bool interrupted = false;  // RunOptions::stop ended the run before the last frame
 };
 
 struct RunOptions {
@@ -64,6 +65,9 @@ struct RunOptions {
   std::function<void(int, int, const FrameOutcome&)> progress;
   // Applied to each frame's colour image before extraction (tests: darkening, black frames).
   std::function<cv::Mat(int, const cv::Mat&)> transform_image;
+  // Checked before every frame; when it returns true the run ends there and returns what was
+  // tracked so far (e.g. on Ctrl-C, so the trajectory up to that point is not lost).
+  std::function<bool()> stop;
 };
 
 // Runs the SLAM over a sequence with the given depth factor (DepthMapFactor).
