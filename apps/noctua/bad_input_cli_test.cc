@@ -191,7 +191,7 @@ TEST_F(BadInputCliTest, EmptySequenceAndBadSettingsCreateNoOutputFolder) {
 }
 
 TEST_F(BadInputCliTest, OneFrameSequenceRunsToTheEnd) {
-  const fs::path out = dir_ / "one";
+  const fs::path out = dir_ / "one_out";
   const auto result = RunNoctua("slam --dataset " + Fr1Subset("one", 1).string() + " --config " +
                                 Config() + " --method orb --out " + out.string());
   ASSERT_EQ(result.exit_code, 0) << result.output;
