@@ -15,5 +15,7 @@ void AddEdgesCommand(CLI::App& app);
 void AddAteCommand(CLI::App& app);
 void AddRpeCommand(CLI::App& app);
 void AddSlamCommand(CLI::App& app);
+void AddSimulateCommand(CLI::App& app);
+void AddEvalCommand(CLI::App& app);
 
 }  // namespace noctua::app

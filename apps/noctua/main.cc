@@ -22,6 +22,8 @@ int main(int argc, char** argv) {
   noctua::app::AddAteCommand(app);
   noctua::app::AddRpeCommand(app);
   noctua::app::AddSlamCommand(app);
+  noctua::app::AddSimulateCommand(app);
+  noctua::app::AddEvalCommand(app);
 
   try {
     app.parse(argc, argv);

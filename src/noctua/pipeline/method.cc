@@ -5,6 +5,7 @@
 
 #include "noctua/edges/edge_detector.h"
 #include "noctua/features/ofast.h"
+#include "noctua/features/surf.h"
 #include "noctua/image/enhancement.h"
 #include "noctua/util/error.h"
 #include "noctua/util/timer.h"
@@ -124,7 +125,7 @@ class FastBriefDetector : public cv::Feature2D {
 }  // namespace
 
 std::vector<std::string> MethodNames() {
-  return {"fast", "orb-opencv", "orb", "he-orb", "clahe-orb", "paper"};
+  return {"fast", "orb-opencv", "orb", "he-orb", "clahe-orb", "paper", "sift", "surf"};
 }
 
 ExtractorOptions OptionsForMethod(const std::string& name, const ExtractorOptions& base) {
@@ -156,6 +157,14 @@ std::unique_ptr<FeatureMethod> CreateMethod(const std::string& name, const Metho
         name, cv::ORB::create(fast.num_features, static_cast<float>(fast.scale_factor),
                               fast.num_levels, 31, 0, 2, cv::ORB::HARRIS_SCORE,
                               features::kPatchSize, fast.initial_fast_threshold));
+  }
+  if (name == "sift") {
+    return std::make_unique<OpenCvMethod>(name, cv::SIFT::create(fast.num_features));
+  }
+  if (name == "surf") {
+    features::SurfOptions surf;
+    surf.max_features = fast.num_features;
+    return std::make_unique<OpenCvMethod>(name, features::Surf::Create(surf));
   }
   if (name == "fast") {
     return std::make_unique<OpenCvMethod>(name, cv::makePtr<FastBriefDetector>(fast));

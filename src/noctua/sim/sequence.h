@@ -1,0 +1,44 @@
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <string>
+
+#include "noctua/io/camera_config.h"
+#include "noctua/sim/low_light.h"
+#include "noctua/sim/moving_person.h"
+
+namespace noctua::sim {
+
+struct SimulationOptions {
+  double level = 1.0;   // mean grey left, relative to the original (1: no darkening)
+  bool person = false;  // composite the walking person
+  MovingPersonOptions person_options;
+  SensorModel sensor;
+  std::uint64_t seed = 1;  // noise seed (frame k uses seed + k)
+  int max_frames = 0;      // 0: every frame of the input
+
+  void Check() const;
+};
+
+struct SimulationReport {
+  int frames = 0;
+  double brightness = 1.0;           // light factor found for `level` on the first frame
+  double measured_mean_ratio = 1.0;  // mean grey of all output frames / of the input frames
+  double person_pixels = 0.0;        // mean share of the frame the person covers
+};
+
+using SimulationProgress = std::function<void(int done, int total)>;
+
+// Writes a TUM-layout copy of an RGB-D sequence (rgb/, depth/, rgb.txt, depth.txt,
+// associations.txt, the original groundtruth.txt) darkened to `level` and, with `person`, with the
+// person composited into colour and depth and its ground-truth mask in mask/ (same file names as
+// rgb/). Depth is never darkened: active depth sensors work in the dark. `output` must exist
+// and be empty of a previous sequence. Throws noctua::Error naming the file on failure.
+SimulationReport SimulateSequence(const std::filesystem::path& input,
+                                  const io::CameraConfig& camera, const SimulationOptions& options,
+                                  const std::filesystem::path& output,
+                                  const SimulationProgress& progress = {});
+
+}  // namespace noctua::sim
