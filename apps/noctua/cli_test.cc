@@ -175,7 +175,44 @@ TEST_F(CliTest, HelpExitsZeroForEveryCommand) {
   EXPECT_EQ(RunNoctua("demo --help").exit_code, 0);
   EXPECT_EQ(RunNoctua("extract --help").exit_code, 0);
   EXPECT_EQ(RunNoctua("edges --help").exit_code, 0);
+  EXPECT_EQ(RunNoctua("simulate --help").exit_code, 0);
+  EXPECT_EQ(RunNoctua("eval --help").exit_code, 0);
   EXPECT_NE(RunNoctua("").exit_code, 0);
+}
+
+TEST_F(CliTest, SimulateThenEvalWriteATumSequenceAndTheReport) {
+  const std::string fr1 = (noctua::testing::DataDir() / "tum_fr1_rpy_200").string();
+  const auto sequence = dir_ / "dark";
+  const CommandResult simulated = RunNoctua(
+      "simulate --dataset " + fr1 + " --camera " + NOCTUA_SOURCE_DIR +
+      "/config/tum_fr1.yaml --level 30 --person --max-frames 12 --out " + sequence.string());
+  ASSERT_EQ(simulated.exit_code, 0) << simulated.output;
+  for (const char* file : {"rgb.txt", "depth.txt", "associations.txt", "groundtruth.txt",
+                           "camera.yaml", "simulation.json"}) {
+    EXPECT_TRUE(std::filesystem::is_regular_file(sequence / file)) << file;
+  }
+  EXPECT_EQ(std::distance(std::filesystem::directory_iterator(sequence / "mask"),
+                          std::filesystem::directory_iterator()),
+            12);
+  const auto report = dir_ / "report";
+  const CommandResult evaluated = RunNoctua("eval --dataset " + sequence.string() +
+                                            " --methods orb,sift --gap 5 --out " + report.string());
+  ASSERT_EQ(evaluated.exit_code, 0) << evaluated.output;
+  EXPECT_THAT(evaluated.output, HasSubstr("| sift |"));
+  for (const char* file : {"summary.md", "counts.csv", "pairs.csv", "counts.png",
+                           "correct_rate.png", "matches_orb.png"}) {
+    EXPECT_TRUE(std::filesystem::is_regular_file(report / file)) << file;
+  }
+  // Bad input: an unknown method and a folder without ground truth, each with a one-line reason.
+  const CommandResult unknown = RunNoctua("eval --dataset " + sequence.string() +
+                                          " --methods orb,nope --out " + (dir_ / "x").string());
+  EXPECT_EQ(unknown.exit_code, 1);
+  EXPECT_THAT(unknown.output, HasSubstr("unknown method 'nope'"));
+  std::filesystem::remove(sequence / "groundtruth.txt");
+  const CommandResult no_truth = RunNoctua("eval --dataset " + sequence.string() +
+                                           " --methods orb --out " + (dir_ / "y").string());
+  EXPECT_EQ(no_truth.exit_code, 1);
+  EXPECT_THAT(no_truth.output, HasSubstr("groundtruth"));
 }
 
 }  // namespace
