@@ -1,0 +1,95 @@
+#include "noctua/dynamic/async_masks.h"
+
+#include "noctua/util/error.h"
+
+namespace noctua::dynamic {
+
+void AsyncMaskOptions::Check() const {
+  CheckOption(every_n >= 1, "async detection every_n must be at least 1");
+}
+
+AsyncMaskPipeline::AsyncMaskPipeline(std::shared_ptr<Detector> detector, MotionLevelTable table,
+                                     DynamicMaskOptions mask_options,
+                                     AsyncMaskOptions async_options)
+    : detector_(std::move(detector)),
+      table_(std::move(table)),
+      mask_options_(std::move(mask_options)),
+      async_options_(async_options) {
+  if (!detector_) throw Error("asynchronous dynamic masks without a detector");
+  mask_options_.Check();
+  async_options_.Check();
+  worker_ = std::thread([this] { Work(); });
+}
+
+AsyncMaskPipeline::~AsyncMaskPipeline() {
+  {
+    std::lock_guard lock(mutex_);
+    stop_ = true;
+  }
+  changed_.notify_all();
+  worker_.join();
+}
+
+void AsyncMaskPipeline::Submit(const cv::Mat& image) {
+  if (image.empty()) throw Error("asynchronous dynamic masks: empty frame");
+  {
+    std::lock_guard lock(mutex_);
+    frames_.push_back(image);
+    ++submitted_;
+  }
+  changed_.notify_all();
+}
+
+cv::Mat AsyncMaskPipeline::Next() {
+  std::unique_lock lock(mutex_);
+  if (OutstandingLocked() == 0) {
+    throw Error("asynchronous dynamic masks: Next() without a submitted frame");
+  }
+  changed_.wait(lock, [this] { return !results_.empty(); });
+  Result result = std::move(results_.front());
+  results_.pop_front();
+  ++taken_;
+  lock.unlock();
+  if (result.error) std::rethrow_exception(result.error);
+  return result.mask;
+}
+
+int AsyncMaskPipeline::outstanding() const {
+  std::lock_guard lock(mutex_);
+  return OutstandingLocked();
+}
+
+void AsyncMaskPipeline::Work() {
+  long index = 0;
+  cv::Mat last_mask;
+  for (;;) {
+    cv::Mat frame;
+    {
+      std::unique_lock lock(mutex_);
+      changed_.wait(lock, [this] { return stop_ || !frames_.empty(); });
+      if (stop_) return;
+      frame = frames_.front();
+    }
+    Result result;
+    try {
+      if (index % async_options_.every_n == 0 || last_mask.empty() ||
+          last_mask.size() != frame.size()) {
+        last_mask = BuildDynamicMask(detector_->Detect(frame), table_, mask_options_, frame.size());
+      }
+      result.mask = last_mask;
+    } catch (...) {
+      result.error = std::current_exception();
+      last_mask = cv::Mat();
+    }
+    ++index;
+    {
+      std::lock_guard lock(mutex_);
+      // The frame leaves the queue only now, so outstanding() counts the one being detected.
+      frames_.pop_front();
+      results_.push_back(std::move(result));
+    }
+    changed_.notify_all();
+  }
+}
+
+}  // namespace noctua::dynamic

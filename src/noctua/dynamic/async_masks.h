@@ -1,0 +1,73 @@
+#pragma once
+
+#include <condition_variable>
+#include <deque>
+#include <exception>
+#include <memory>
+#include <mutex>
+#include <opencv2/core.hpp>
+#include <thread>
+
+#include "noctua/dynamic/dynamic_mask.h"
+
+namespace noctua::dynamic {
+
+struct AsyncMaskOptions {
+  // Run the detector on every N-th frame (0, N, 2N, ...); the frames between reuse the last mask.
+  // 1 = every frame, exact masks.
+  int every_n = 1;
+  void Check() const;
+};
+
+// Dynamic masks computed on a thread of their own, so that a sequence's throughput is set by the
+// slower of detection and extraction, not by their sum. Submit frame i+1 before extracting frame
+// i and detection of the next frame overlaps extraction of this one:
+//
+//   masks.Submit(frame[0]);
+//   for (i = 0; i < n; ++i) {
+//     if (i + 1 < n) masks.Submit(frame[i + 1]);
+//     extractor.Extract(frame[i], masks.Next());
+//   }
+//
+// Masks come back in submission order. The detector is used only by the worker thread while the
+// pipeline lives. A submitted image's pixels must stay unchanged until its mask has come back.
+class AsyncMaskPipeline {
+ public:
+  AsyncMaskPipeline(std::shared_ptr<Detector> detector, MotionLevelTable table,
+                    DynamicMaskOptions mask_options, AsyncMaskOptions async_options = {});
+  ~AsyncMaskPipeline();
+  AsyncMaskPipeline(const AsyncMaskPipeline&) = delete;
+  AsyncMaskPipeline& operator=(const AsyncMaskPipeline&) = delete;
+
+  // Queues a frame for detection; returns at once.
+  void Submit(const cv::Mat& image);
+  // Waits for the mask of the oldest submitted frame whose mask has not been taken. Rethrows what
+  // detection threw for that frame. Throws noctua::Error when no frame is outstanding.
+  cv::Mat Next();
+  // Frames submitted whose masks have not been taken.
+  int outstanding() const;
+
+ private:
+  struct Result {
+    cv::Mat mask;
+    std::exception_ptr error;
+  };
+  void Work();
+  int OutstandingLocked() const { return static_cast<int>(submitted_ - taken_); }
+
+  std::shared_ptr<Detector> detector_;
+  MotionLevelTable table_;
+  DynamicMaskOptions mask_options_;
+  AsyncMaskOptions async_options_;
+
+  mutable std::mutex mutex_;
+  std::condition_variable changed_;
+  std::deque<cv::Mat> frames_;
+  std::deque<Result> results_;
+  long submitted_ = 0;
+  long taken_ = 0;
+  bool stop_ = false;
+  std::thread worker_;  // last: starts after everything it uses exists
+};
+
+}  // namespace noctua::dynamic
