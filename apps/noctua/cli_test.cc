@@ -170,6 +170,47 @@ TEST_F(CliTest, EdgesWritesOneMapPerMethodAndThePanel) {
   EXPECT_THAT(small.output, HasSubstr("smaller than the minimum"));
 }
 
+TEST_F(CliTest, DetectWritesOverlayMaskAndJsonAndNamesABadModel) {
+  const auto models = noctua::testing::ModelsDir();
+  const auto bus = models / "images" / "bus.jpg";
+  const auto out = dir_ / "detect";
+  const CommandResult result = RunNoctua("detect " + bus.string() + " --model " +
+                                         (models / "yolov8n" / "yolov8n_head_f32.onnx").string() +
+                                         " --input 480x640 --out " + out.string());
+  ASSERT_EQ(result.exit_code, 0) << result.output;
+  std::ifstream in(out / "detect.json");
+  const auto summary = nlohmann::json::parse(in);
+  EXPECT_EQ(summary["kind"], "yolov8-head");
+  ASSERT_EQ(summary["images"].size(), 1u);
+  const auto& image = summary["images"][0];
+  int people = 0;
+  for (const auto& d : image["detections"]) {
+    if (d["class"] == "person") {
+      ++people;
+      EXPECT_EQ(d["motion_level"], "high");
+      EXPECT_TRUE(d["dynamic"].get<bool>());
+    }
+    if (d["class"] == "bus") {
+      EXPECT_FALSE(d["dynamic"].get<bool>());
+    }
+  }
+  EXPECT_EQ(people, 4);
+  EXPECT_GT(image["dynamic_fraction"].get<double>(), 0.1);
+  const cv::Mat overlay = cv::imread((out / image["overlay"].get<std::string>()).string());
+  EXPECT_EQ(overlay.size(), cv::Size(810, 1080));
+  const cv::Mat mask =
+      cv::imread((out / image["mask"].get<std::string>()).string(), cv::IMREAD_UNCHANGED);
+  EXPECT_EQ(mask.type(), CV_8UC1);
+
+  const auto missing = RunNoctua("detect " + bus.string() + " --model /nonexistent/m.onnx --out " +
+                                 (dir_ / "d2").string());
+  EXPECT_EQ(missing.exit_code, 1);
+  EXPECT_THAT(missing.output, HasSubstr("/nonexistent/m.onnx: detector model not found"));
+  const auto bad_size = RunNoctua("detect " + bus.string() + " --model /x.onnx --input 300x200");
+  EXPECT_EQ(bad_size.exit_code, 1);
+  EXPECT_THAT(bad_size.output, HasSubstr("multiple of 32"));
+}
+
 TEST_F(CliTest, HelpExitsZeroForEveryCommand) {
   EXPECT_EQ(RunNoctua("--help").exit_code, 0);
   EXPECT_EQ(RunNoctua("demo --help").exit_code, 0);
@@ -177,6 +218,7 @@ TEST_F(CliTest, HelpExitsZeroForEveryCommand) {
   EXPECT_EQ(RunNoctua("edges --help").exit_code, 0);
   EXPECT_EQ(RunNoctua("simulate --help").exit_code, 0);
   EXPECT_EQ(RunNoctua("eval --help").exit_code, 0);
+  EXPECT_EQ(RunNoctua("detect --help").exit_code, 0);
   EXPECT_NE(RunNoctua("").exit_code, 0);
 }
 

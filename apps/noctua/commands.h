@@ -12,6 +12,7 @@ namespace noctua::app {
 void AddDemoCommand(CLI::App& app);
 void AddExtractCommand(CLI::App& app);
 void AddEdgesCommand(CLI::App& app);
+void AddDetectCommand(CLI::App& app);
 void AddAteCommand(CLI::App& app);
 void AddRpeCommand(CLI::App& app);
 void AddSlamCommand(CLI::App& app);

@@ -19,6 +19,7 @@ int main(int argc, char** argv) {
   noctua::app::AddDemoCommand(app);
   noctua::app::AddExtractCommand(app);
   noctua::app::AddEdgesCommand(app);
+  noctua::app::AddDetectCommand(app);
   noctua::app::AddAteCommand(app);
   noctua::app::AddRpeCommand(app);
   noctua::app::AddSlamCommand(app);

@@ -1,6 +1,9 @@
 #include "noctua/pipeline/method.h"
 
+#include <spdlog/spdlog.h>
+
 #include <algorithm>
+#include <mutex>
 #include <opencv2/imgproc.hpp>
 
 #include "noctua/edges/edge_detector.h"
@@ -176,6 +179,18 @@ std::unique_ptr<FeatureMethod> CreateMethod(const std::string& name, const Metho
     auto method = std::make_unique<ExtractorMethod>(name, OptionsForMethod(name, config.extractor));
     method->extractor().SetEdgeMapSource(
         edges::MakeEdgeMapSource(edges::CreateEdgeDetector(edges::EdgeDetectorOptions())));
+    if (!config.detector_model.empty()) {
+      method->extractor().SetDynamicMaskSource(dynamic::MakeDynamicMaskSource(
+          dynamic::LoadDetector(config.detector_model, config.detector), config.motion_levels,
+          config.dynamic_mask));
+    } else {
+      static std::once_flag said;
+      std::call_once(said, [] {
+        spdlog::warn(
+            "paper: no detector model configured (--detector or dynamic.model): the dynamic "
+            "filter is off, points on moving people are kept");
+      });
+    }
     return method;
   }
   std::string known;

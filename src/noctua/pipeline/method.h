@@ -5,6 +5,9 @@
 #include <string>
 #include <vector>
 
+#include "noctua/dynamic/detector.h"
+#include "noctua/dynamic/dynamic_mask.h"
+#include "noctua/dynamic/motion_levels.h"
 #include "noctua/features/extractor.h"
 #include "noctua/features/extractor_options.h"
 
@@ -15,8 +18,15 @@ namespace noctua::pipeline {
 struct MethodConfig {
   features::ExtractorOptions extractor;  // base options, e.g. from a settings file
   std::string detector_model;            // ONNX model for the paper's dynamic regions ("" = none)
+  dynamic::DetectorOptions detector;     // its input size and thresholds
+  dynamic::MotionLevelTable motion_levels;   // COCO class -> motion level (paper Table 1)
+  dynamic::DynamicMaskOptions dynamic_mask;  // which levels are dynamic, box/instance, dilation
 
-  void Check() const { extractor.Check(); }
+  void Check() const {
+    extractor.Check();
+    detector.Check();
+    dynamic_mask.Check();
+  }
 };
 
 // One feature method (ours or a baseline) behind one interface, so evaluation, SLAM and the

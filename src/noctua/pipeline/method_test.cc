@@ -7,6 +7,7 @@
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 
+#include "noctua/dynamic/coco.h"
 #include "noctua/edges/edge_detector.h"
 #include "noctua/image/enhancement.h"
 #include "noctua/testing/shared_data.h"
@@ -107,6 +108,69 @@ TEST(CreateMethod, PaperKeepsOnlyPointsNearPhaseCongruencyEdges) {
     // Within the level's radius of a PC edge pixel, plus a pixel for rounding between levels.
     EXPECT_LE(distance.at<float>(pixel), options.edge_filter.radius_px * scale + 1.5)
         << "point " << point.pt << " octave " << point.octave;
+  }
+}
+
+std::filesystem::path YoloV8n() {
+  return noctua::testing::ModelsDir() / "yolov8n" / "yolov8n_head_f32.onnx";
+}
+
+TEST(CreateMethod, PaperWithADetectorLeavesNoPointOnThePeopleOfFr3Walking) {
+  MethodConfig config;
+  config.detector_model = YoloV8n().string();
+  auto paper = CreateMethod("paper", config);
+  // The people as a second, finer model sees them: the two largest person instance masks of
+  // YOLOv8n-seg at full resolution.
+  dynamic::DetectorOptions fine;
+  fine.input_width = 640;
+  fine.input_height = 480;
+  const auto seg = dynamic::LoadDetector(
+      noctua::testing::ModelsDir() / "yolov8n-seg" / "yolov8n-seg_head_f32.onnx", fine);
+  std::vector<std::filesystem::path> paths;
+  for (const auto& entry : std::filesystem::directory_iterator(
+           noctua::testing::DataDir() / "tum_fr3_walking_rpy_rgb16" / "rgb")) {
+    paths.push_back(entry.path());
+  }
+  std::sort(paths.begin(), paths.end());
+  ASSERT_EQ(paths.size(), 16u);
+  for (size_t i = 0; i < paths.size(); i += 7) {
+    SCOPED_TRACE(paths[i].filename().string());
+    const cv::Mat frame = noctua::testing::ReadImageOrThrow(paths[i], cv::IMREAD_COLOR);
+    std::vector<cv::Mat> masks;
+    for (const auto& d : seg->Detect(frame)) {
+      if (d.class_id == dynamic::CocoClassId("person")) masks.push_back(d.mask);
+    }
+    ASSERT_GE(masks.size(), 2u);
+    std::sort(masks.begin(), masks.end(), [](const cv::Mat& a, const cv::Mat& b) {
+      return cv::countNonZero(a) > cv::countNonZero(b);
+    });
+    const cv::Mat people = masks[0] | masks[1];
+    const auto result = paper->Run(frame);
+    EXPECT_THAT(::testing::PrintToString(result.stats.stages_ran), HasSubstr("dynamic"));
+    EXPECT_LT(result.stats.after_dynamic, result.stats.after_mask);
+    int on_people = 0;
+    for (const cv::KeyPoint& point : result.keypoints) {
+      on_people += people.at<uchar>(cvRound(point.pt.y), cvRound(point.pt.x)) > 0;
+    }
+    EXPECT_EQ(on_people, 0);
+    EXPECT_GT(result.keypoints.size(), 100u);
+    // Without the detector, the same method keeps points on the people.
+    int unfiltered_on_people = 0;
+    for (const cv::KeyPoint& point : CreateMethod("paper", MethodConfig{})->Run(frame).keypoints) {
+      unfiltered_on_people += people.at<uchar>(cvRound(point.pt.y), cvRound(point.pt.x)) > 0;
+    }
+    EXPECT_GT(unfiltered_on_people, 20);
+  }
+}
+
+TEST(CreateMethod, PaperWithABadDetectorPathNamesTheFile) {
+  MethodConfig config;
+  config.detector_model = "/nonexistent/detector.onnx";
+  try {
+    CreateMethod("paper", config);
+    FAIL() << "a missing detector model was accepted";
+  } catch (const Error& error) {
+    EXPECT_THAT(error.what(), HasSubstr("/nonexistent/detector.onnx"));
   }
 }
 
