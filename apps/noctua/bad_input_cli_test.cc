@@ -16,6 +16,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <sstream>
 
+#include "cli_runner.h"
 #include "noctua/io/trajectory.h"
 #include "noctua/testing/shared_data.h"
 
@@ -26,22 +27,8 @@ using ::testing::AllOf;
 using ::testing::HasSubstr;
 using ::testing::Not;
 
-struct CommandResult {
-  int exit_code = -1;
-  std::string output;  // stdout and stderr together
-};
-
-CommandResult RunNoctua(const std::string& arguments) {
-  const std::string command = std::string(NOCTUA_BINARY) + " " + arguments + " 2>&1";
-  CommandResult result;
-  FILE* pipe = popen(command.c_str(), "r");
-  if (pipe == nullptr) return result;
-  std::array<char, 4096> buffer{};
-  while (fgets(buffer.data(), buffer.size(), pipe) != nullptr) result.output += buffer.data();
-  const int status = pclose(pipe);
-  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return result;
-}
+using noctua::app::testing::CommandResult;
+using noctua::app::testing::RunNoctua;
 
 std::string ReadText(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);
