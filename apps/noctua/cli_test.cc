@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
 #include "cli_runner.h"
@@ -242,6 +243,62 @@ TEST_F(CliTest, SimulateThenEvalWriteATumSequenceAndTheReport) {
                                            " --methods orb --out " + (dir_ / "y").string());
   EXPECT_EQ(no_truth.exit_code, 1);
   EXPECT_THAT(no_truth.output, HasSubstr("groundtruth"));
+}
+
+TEST_F(CliTest, SimulateCompositesARealPersonCutOutGivenByAMaskOrFoundByTheSegmenter) {
+  const std::string fr1 = (noctua::testing::DataDir() / "tum_fr1_rpy_200").string();
+  const std::string camera = std::string(NOCTUA_SOURCE_DIR) + "/config/tum_fr1.yaml";
+  const auto fr3 =
+      noctua::testing::DataDir() / "tum_fr3_walking_rpy_rgb16" / "rgb" / "1341846648.438342.png";
+  // A hand-made mask: a rectangle standing for the person.
+  const auto mask = dir_ / "person_mask.png";
+  cv::Mat mask_image = cv::Mat::zeros(480, 640, CV_8UC1);
+  mask_image(cv::Rect(340, 20, 150, 440)).setTo(255);
+  ASSERT_TRUE(cv::imwrite(mask.string(), mask_image));
+  const std::string base = "simulate --dataset " + fr1 + " --camera " + camera +
+                           " --max-frames 6 --person-distance 0.5 --person-cutout " + fr3.string();
+  const auto with_mask = dir_ / "with_mask";
+  const CommandResult masked =
+      RunNoctua(base + " --person-mask " + mask.string() + " --out " + with_mask.string());
+  ASSERT_EQ(masked.exit_code, 0) << masked.output;
+  int most_covered = 0;  // the walk crosses the view: some frame shows much of the person
+  for (const auto& entry : std::filesystem::directory_iterator(with_mask / "mask")) {
+    const cv::Mat person_mask = cv::imread(entry.path().string(), cv::IMREAD_UNCHANGED);
+    ASSERT_FALSE(person_mask.empty()) << entry.path();
+    most_covered = std::max(most_covered, cv::countNonZero(person_mask));
+  }
+  EXPECT_GT(most_covered, 10000);
+
+  const auto segmented = dir_ / "segmented";
+  const CommandResult found = RunNoctua(
+      base + " --seg-model " +
+      (noctua::testing::ModelsDir() / "yolov8n-seg" / "yolov8n-seg_head_f32.onnx").string() +
+      " --out " + segmented.string());
+  ASSERT_EQ(found.exit_code, 0) << found.output;
+  EXPECT_TRUE(std::filesystem::is_regular_file(segmented / "simulation.json"));
+
+  // Bad input, each with a one-line reason.
+  const CommandResult both_missing = RunNoctua(base + " --out " + (dir_ / "a").string());
+  EXPECT_EQ(both_missing.exit_code, 1);
+  EXPECT_THAT(both_missing.output, HasSubstr("exactly one of --person-mask and --seg-model"));
+  const auto small = dir_ / "small_mask.png";
+  ASSERT_TRUE(cv::imwrite(small.string(), cv::Mat(48, 64, CV_8UC1, cv::Scalar(255))));
+  const CommandResult wrong_size =
+      RunNoctua(base + " --person-mask " + small.string() + " --out " + (dir_ / "b").string());
+  EXPECT_EQ(wrong_size.exit_code, 1);
+  EXPECT_THAT(wrong_size.output, HasSubstr("small_mask.png: person mask is not of the cut-out"));
+  const auto empty = dir_ / "empty_mask.png";
+  ASSERT_TRUE(cv::imwrite(empty.string(), cv::Mat::zeros(480, 640, CV_8UC1)));
+  const CommandResult empty_mask =
+      RunNoctua(base + " --person-mask " + empty.string() + " --out " + (dir_ / "c").string());
+  EXPECT_EQ(empty_mask.exit_code, 1);
+  EXPECT_THAT(empty_mask.output, HasSubstr("empty_mask.png: person mask is empty"));
+  const CommandResult not_seg =
+      RunNoctua(base + " --seg-model " +
+                (noctua::testing::ModelsDir() / "yolov8n" / "yolov8n_head_f32.onnx").string() +
+                " --out " + (dir_ / "d").string());
+  EXPECT_EQ(not_seg.exit_code, 1);
+  EXPECT_THAT(not_seg.output, HasSubstr("not a segmentation model"));
 }
 
 }  // namespace

@@ -5,9 +5,15 @@
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "commands.h"
+#include "noctua/dynamic/coco.h"
+#include "noctua/dynamic/detector.h"
+#include "noctua/dynamic/dynamic_mask.h"
+#include "noctua/image/enhancement.h"
 #include "noctua/io/camera_config.h"
+#include "noctua/io/image_file.h"
 #include "noctua/sim/sequence.h"
 #include "noctua/util/error.h"
 #include "output_dir.h"
@@ -24,12 +30,39 @@ struct SimulateFlags {
   double level_percent = 100.0;
   bool person = false;
   double person_distance_m = sim::MovingPersonOptions{}.distance_m;
+  std::string person_cutout;  // image with a real person to composite
+  std::string person_mask;    // its mask, or
+  std::string seg_model;      // a segmentation model that finds it
   std::uint64_t seed = 1;
   int max_frames = 0;
   double full_well = sim::SensorModel{}.full_well_electrons;
   double read_noise = sim::SensorModel{}.read_noise_electrons;
   bool force = false;
 };
+
+// The real person of --person-cutout: the mask given, or the largest person the segmentation
+// model finds.
+sim::PersonCutout LoadCutout(const SimulateFlags& flags) {
+  cv::Mat image = io::ReadImage8U(flags.person_cutout);
+  if (image.channels() == 1) cv::cvtColor(image, image, cv::COLOR_GRAY2BGR);
+  if (image.channels() == 4) cv::cvtColor(image, image, cv::COLOR_BGRA2BGR);
+  cv::Mat mask;
+  if (!flags.person_mask.empty()) {
+    mask = image::ToGray8U(io::ReadImage8U(flags.person_mask));
+    if (mask.size() != image.size()) {
+      ThrowFileError(flags.person_mask, "person mask is not of the cut-out image's size");
+    }
+    if (cv::countNonZero(mask) == 0) ThrowFileError(flags.person_mask, "person mask is empty");
+  } else {
+    const auto detector = dynamic::LoadDetector(flags.seg_model);
+    if (!detector->has_masks()) {
+      ThrowFileError(flags.seg_model, "not a segmentation model (no instance masks)");
+    }
+    mask = dynamic::LargestInstanceMask(detector->Detect(image), dynamic::CocoClassId("person"));
+    if (mask.empty()) ThrowFileError(flags.person_cutout, "no person found to cut out");
+  }
+  return sim::PersonCutout::FromMask(image, mask);
+}
 
 void RunSimulate(const SimulateFlags& flags) {
   if (!(flags.level_percent > 0.0 && flags.level_percent <= 100.0)) {
@@ -38,7 +71,15 @@ void RunSimulate(const SimulateFlags& flags) {
   const io::CameraConfig camera = io::ReadCameraConfig(flags.camera);
   sim::SimulationOptions options;
   options.level = flags.level_percent / 100.0;
-  options.person = flags.person;
+  options.person = flags.person || !flags.person_cutout.empty();
+  if (!flags.person_cutout.empty()) {
+    if (flags.person_mask.empty() == flags.seg_model.empty()) {
+      throw Error("--person-cutout needs exactly one of --person-mask and --seg-model");
+    }
+    options.person_cutout = LoadCutout(flags);
+  } else if (!flags.person_mask.empty() || !flags.seg_model.empty()) {
+    throw Error("--person-mask and --seg-model only apply with --person-cutout");
+  }
   options.person_options.distance_m = flags.person_distance_m;
   options.sensor.full_well_electrons = flags.full_well;
   options.sensor.read_noise_electrons = flags.read_noise;
@@ -64,6 +105,7 @@ void RunSimulate(const SimulateFlags& flags) {
                          {"seed", options.seed},
                          {"person", options.person},
                          {"person_distance_m", options.person_options.distance_m},
+                         {"person_cutout", flags.person_cutout},
                          {"person_mean_coverage", report.person_pixels}};
   WriteTextFileAtomically(out / "simulation.json", json.dump(2) + "\n");
   std::cout << "simulated " << report.frames << " frames into " << out.string()
@@ -93,6 +135,18 @@ void AddSimulateCommand(CLI::App& app) {
       ->add_option("--person-distance", flags->person_distance_m,
                    "Distance of the person from the camera, metres")
       ->capture_default_str();
+  command
+      ->add_option("--person-cutout", flags->person_cutout,
+                   "Composite this real person (an image with one in it) in place of the drawn one")
+      ->check(CLI::ExistingFile);
+  command
+      ->add_option("--person-mask", flags->person_mask,
+                   "Mask PNG of the person in the --person-cutout image (non-zero on the person)")
+      ->check(CLI::ExistingFile);
+  command
+      ->add_option("--seg-model", flags->seg_model,
+                   "Or: a YOLOv8-seg ONNX model that finds the largest person in that image")
+      ->check(CLI::ExistingFile);
   command->add_option("--full-well", flags->full_well, "Sensor full well, electrons")
       ->capture_default_str();
   command->add_option("--read-noise", flags->read_noise, "Sensor read noise, electrons rms")

@@ -38,6 +38,20 @@ cv::Mat BuildDynamicMask(const std::vector<Detection>& detections, const MotionL
   return mask;
 }
 
+cv::Mat LargestInstanceMask(const std::vector<Detection>& detections, int class_id) {
+  const Detection* largest = nullptr;
+  int largest_area = 0;
+  for (const Detection& detection : detections) {
+    if (detection.class_id != class_id || detection.mask.empty()) continue;
+    const int area = cv::countNonZero(detection.mask);
+    if (area > largest_area) {
+      largest = &detection;
+      largest_area = area;
+    }
+  }
+  return largest != nullptr ? largest->mask.clone() : cv::Mat();
+}
+
 features::DynamicMaskSource MakeDynamicMaskSource(std::shared_ptr<Detector> detector,
                                                   MotionLevelTable table,
                                                   DynamicMaskOptions options) {

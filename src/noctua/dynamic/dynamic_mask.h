@@ -34,6 +34,10 @@ struct DynamicMaskOptions {
 cv::Mat BuildDynamicMask(const std::vector<Detection>& detections, const MotionLevelTable& table,
                          const DynamicMaskOptions& options, cv::Size size);
 
+// The instance mask of the largest object (by mask area) of `class_id`, e.g. a person to cut out of
+// a frame; empty when there is none or the detections carry no masks (box-only models).
+cv::Mat LargestInstanceMask(const std::vector<Detection>& detections, int class_id);
+
 // Detector + motion levels as the extractor's DynamicMaskSource (synchronous: detection runs in
 // the calling thread). The detector is shared, not copied; calls must not overlap.
 features::DynamicMaskSource MakeDynamicMaskSource(std::shared_ptr<Detector> detector,

@@ -39,6 +39,25 @@ Detection Box(int class_id, float x, float y, float w, float h) {
   return detection;
 }
 
+TEST(LargestInstanceMask, PicksTheLargestMaskOfTheClassOnly) {
+  const cv::Size size(64, 48);
+  auto with_mask = [&](int class_id, cv::Rect region) {
+    Detection detection = Box(class_id, region.x, region.y, region.width, region.height);
+    detection.mask = cv::Mat::zeros(size, CV_8UC1);
+    detection.mask(region).setTo(255);
+    return detection;
+  };
+  const std::vector<Detection> detections = {
+      with_mask(0, {0, 0, 10, 10}), with_mask(2, {0, 0, 40, 40}),  // a larger car
+      with_mask(0, {20, 5, 12, 20}), Box(0, 0, 0, 60, 40)};        // a larger box, no mask
+  const cv::Mat person = LargestInstanceMask(detections, CocoClassId("person"));
+  ASSERT_FALSE(person.empty());
+  EXPECT_EQ(cv::countNonZero(person), 12 * 20);
+  EXPECT_EQ(cv::boundingRect(person), cv::Rect(20, 5, 12, 20));
+  EXPECT_TRUE(LargestInstanceMask(detections, CocoClassId("dog")).empty());
+  EXPECT_TRUE(LargestInstanceMask({Box(0, 0, 0, 10, 10)}, 0).empty());
+}
+
 TEST(BuildDynamicMask, OnlyDynamicLevelsWithBoxesInstancesAndDilation) {
   const int person = CocoClassId("person"), chair = CocoClassId("chair");
   const int car = CocoClassId("car");

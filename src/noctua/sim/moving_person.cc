@@ -40,12 +40,33 @@ cv::Mat MakeTexture(double height_m, std::uint64_t seed) {
 
 }  // namespace
 
+PersonCutout PersonCutout::FromMask(const cv::Mat& image, const cv::Mat& mask) {
+  if (image.type() != CV_8UC3) throw Error("person cut-out: the image must be 8-bit BGR");
+  if (mask.type() != CV_8UC1 || mask.size() != image.size()) {
+    throw Error("person cut-out: the mask must be 8-bit, one channel, of the image's size");
+  }
+  const cv::Rect box = cv::boundingRect(mask);
+  if (box.empty()) throw Error("person cut-out: the mask is empty");
+  PersonCutout cutout{image(box).clone(), mask(box).clone()};
+  return cutout;
+}
+
+void PersonCutout::Check() const {
+  CheckOption(image.type() == CV_8UC3, "person cut-out image must be 8-bit BGR");
+  CheckOption(mask.type() == CV_8UC1 && mask.size() == image.size(),
+              "person cut-out mask must be 8-bit, one channel, of the image's size");
+  CheckOption(cv::countNonZero(mask) > 0, "person cut-out mask is empty");
+}
+
 void MovingPersonOptions::Check() const {
   CheckOption(height_m > 0.2 && height_m < 3.0, "person height_m must be in (0.2, 3) m");
   CheckOption(distance_m > 0.1, "person distance_m must be more than 0.1 m");
   CheckOption(std::isfinite(start_x) && std::isfinite(end_x) && std::isfinite(feet_y),
               "person path must be finite");
   CheckOption(stride_m > 0.0, "person stride_m must be positive");
+  CheckOption(cutout_height > 0.05 && cutout_height <= 3.0,
+              "person cutout_height must be in (0.05, 3] image heights");
+  CheckOption(std::isfinite(cutout_bottom_y), "person cutout_bottom_y must be finite");
 }
 
 MovingPerson::MovingPerson(const MovingPersonOptions& options, double focal_px, double depth_factor)
@@ -58,6 +79,37 @@ MovingPerson::MovingPerson(const MovingPersonOptions& options, double focal_px, 
   texture_ = MakeTexture(options_.height_m, options_.texture_seed);
 }
 
+MovingPerson::MovingPerson(const MovingPersonOptions& options, double focal_px, double depth_factor,
+                           PersonCutout cutout)
+    : MovingPerson(options, focal_px, depth_factor) {
+  cutout.Check();
+  is_cutout_ = true;
+  cv::compare(cutout.mask, 0, cutout_mask_, cv::CMP_NE);
+  // The crop's background would bleed into the person's outline when the colour is interpolated:
+  // give every background pixel the colour of its nearest person pixel.
+  cv::Mat background = cutout_mask_ == 0;
+  cv::Mat distance, labels;
+  cv::distanceTransform(background, distance, labels, cv::DIST_L2, cv::DIST_MASK_5,
+                        cv::DIST_LABEL_PIXEL);
+  std::vector<cv::Vec3b> person_colour(1);  // labels count person pixels from 1 in scan order
+  for (int y = 0; y < cutout_mask_.rows; ++y) {
+    for (int x = 0; x < cutout_mask_.cols; ++x) {
+      if (cutout_mask_.at<uchar>(y, x) != 0)
+        person_colour.push_back(cutout.image.at<cv::Vec3b>(y, x));
+    }
+  }
+  cutout_colour_ = cutout.image.clone();
+  for (int y = 0; y < cutout_mask_.rows; ++y) {
+    for (int x = 0; x < cutout_mask_.cols; ++x) {
+      const int label = labels.at<int>(y, x);
+      if (cutout_mask_.at<uchar>(y, x) == 0 && label > 0 &&
+          label < static_cast<int>(person_colour.size())) {
+        cutout_colour_.at<cv::Vec3b>(y, x) = person_colour[static_cast<std::size_t>(label)];
+      }
+    }
+  }
+}
+
 PersonFrame MovingPerson::Composite(const cv::Mat& image, const cv::Mat& depth16,
                                     double progress) const {
   if (image.empty() || image.depth() != CV_8U) {
@@ -67,6 +119,24 @@ PersonFrame MovingPerson::Composite(const cv::Mat& image, const cv::Mat& depth16
     throw Error("person compositing needs a 16-bit depth image of the image's size");
   }
   CheckOption(progress >= 0.0 && progress <= 1.0, "person walk progress must be in [0, 1]");
+
+  if (is_cutout_) {
+    // The cut-out slides from start_x to end_x (its centre, in image widths), its lower edge at
+    // cutout_bottom_y image heights.
+    const double scale = options_.cutout_height * image.rows / cutout_colour_.rows;
+    const double centre_x =
+        image.cols * (options_.start_x + progress * (options_.end_x - options_.start_x));
+    const double left = centre_x - cutout_colour_.cols * scale / 2.0;
+    const double top = options_.cutout_bottom_y * image.rows - cutout_colour_.rows * scale;
+    const cv::Matx23d to_image(scale, 0.0, left, 0.0, scale, top);
+    cv::Mat body_mask;
+    cv::Mat body_colour;
+    cv::warpAffine(cutout_mask_, body_mask, to_image, image.size(), cv::INTER_NEAREST,
+                   cv::BORDER_CONSTANT, cv::Scalar(0));
+    cv::warpAffine(cutout_colour_, body_colour, to_image, image.size(), cv::INTER_LINEAR,
+                   cv::BORDER_REPLICATE);
+    return Paint(image, depth16, body_mask, body_colour);
+  }
 
   // Body geometry in metres (x right, y down from the top of the head), drawn into a sprite at
   // the texture's resolution and then scaled to the image by perspective.
@@ -115,7 +185,11 @@ PersonFrame MovingPerson::Composite(const cv::Mat& image, const cv::Mat& depth16
                  cv::BORDER_CONSTANT, cv::Scalar(0));
   cv::warpAffine(texture_, body_colour, to_image, image.size(), cv::INTER_LINEAR,
                  cv::BORDER_REPLICATE);
+  return Paint(image, depth16, body_mask, body_colour);
+}
 
+PersonFrame MovingPerson::Paint(const cv::Mat& image, const cv::Mat& depth16,
+                                const cv::Mat& body_mask, const cv::Mat& body_colour) const {
   // The person is visible where it is nearer than the scene or where the scene has no depth.
   const auto person_depth =
       static_cast<std::uint16_t>(std::lround(options_.distance_m * depth_factor_));

@@ -76,6 +76,64 @@ TEST(MovingPerson, FeatureDetectorsFindPointsOnTheBodyOfARealFrame) {
   EXPECT_GT(on_person, 50);
 }
 
+// A cut-out with a known shape: a 40x100 crop whose left half is the person (blue), the right
+// half background that must never be drawn.
+PersonCutout KnownCutout() {
+  cv::Mat image(200, 300, CV_8UC3, cv::Scalar(0, 255, 0));
+  cv::Mat mask = cv::Mat::zeros(image.size(), CV_8UC1);
+  image(cv::Rect(100, 50, 20, 100)).setTo(cv::Scalar(255, 0, 0));
+  mask(cv::Rect(100, 50, 20, 100)).setTo(255);
+  PersonCutout cutout = PersonCutout::FromMask(image, mask);
+  // The crop is the mask's bounding box; widen it by a background column on the right.
+  cv::Mat wide_image(100, 40, CV_8UC3, cv::Scalar(0, 255, 0));
+  cv::Mat wide_mask = cv::Mat::zeros(100, 40, CV_8UC1);
+  cutout.image.copyTo(wide_image(cv::Rect(0, 0, 20, 100)));
+  cutout.mask.copyTo(wide_mask(cv::Rect(0, 0, 20, 100)));
+  return {wide_image, wide_mask};
+}
+
+TEST(MovingPerson, CutoutIsCroppedScaledPlacedAndOnlyItsMaskDrawn) {
+  const PersonCutout crop =
+      PersonCutout::FromMask(cv::Mat(30, 40, CV_8UC3, cv::Scalar(1, 2, 3)), [] {
+        cv::Mat mask = cv::Mat::zeros(30, 40, CV_8UC1);
+        mask(cv::Rect(5, 7, 9, 11)).setTo(255);
+        return mask;
+      }());
+  EXPECT_EQ(crop.image.size(), cv::Size(9, 11));
+  EXPECT_EQ(cv::countNonZero(crop.mask), 9 * 11);
+
+  const cv::Mat image(480, 640, CV_8UC3, cv::Scalar(90, 90, 90));
+  cv::Mat depth(480, 640, CV_16UC1, cv::Scalar(3.0 * kDepthFactor));
+  MovingPersonOptions options;
+  options.cutout_height = 0.5;  // 100 rows -> 240 rows: scale 2.4
+  options.cutout_bottom_y = 1.0;
+  options.distance_m = 1.5;
+  const MovingPerson person(options, kFocal, kDepthFactor, KnownCutout());
+  // progress 0.5: centre at (-0.4 + 0.5 * 1.8) = 0.5 image widths = x 320; the 40-column crop
+  // spans 96 columns (272..368), the person its left half (272..320); rows 240..480.
+  const PersonFrame frame = person.Composite(image, depth, 0.5);
+  const cv::Rect drawn = cv::boundingRect(frame.mask);
+  EXPECT_NEAR(drawn.x, 272, 2);
+  EXPECT_NEAR(drawn.width, 48, 2);
+  EXPECT_NEAR(drawn.y, 240, 2);
+  EXPECT_NEAR(drawn.y + drawn.height, 480, 1);
+  for (int y = 0; y < 480; ++y) {
+    for (int x = 0; x < 640; ++x) {
+      const auto colour = frame.image.at<cv::Vec3b>(y, x);
+      if (frame.mask.at<uchar>(y, x) != 0) {
+        ASSERT_EQ(frame.depth.at<std::uint16_t>(y, x), 1.5 * kDepthFactor);
+        ASSERT_GT(colour[0], 200);  // the person's blue, never the crop's green background
+        ASSERT_LT(colour[1], 60);
+      } else {
+        ASSERT_EQ(colour, cv::Vec3b(90, 90, 90));
+      }
+    }
+  }
+  // Nearer scene hides it.
+  depth.setTo(1.0 * kDepthFactor);
+  EXPECT_EQ(cv::countNonZero(person.Composite(image, depth, 0.5).mask), 0);
+}
+
 TEST(MovingPerson, RefusesBadInput) {
   EXPECT_THROW(MovingPerson(MovingPersonOptions{}, 0.0, kDepthFactor), Error);
   MovingPersonOptions options;
@@ -86,6 +144,11 @@ TEST(MovingPerson, RefusesBadInput) {
   EXPECT_THROW(person.Composite(image, cv::Mat(48, 64, CV_8UC1), 0.5), Error);
   EXPECT_THROW(person.Composite(image, cv::Mat(48, 60, CV_16UC1), 0.5), Error);
   EXPECT_THROW(person.Composite(image, cv::Mat(48, 64, CV_16UC1), 1.5), Error);
+  EXPECT_THROW(PersonCutout::FromMask(image, cv::Mat::zeros(48, 64, CV_8UC1)), Error);
+  EXPECT_THROW(PersonCutout::FromMask(image, cv::Mat::ones(40, 64, CV_8UC1)), Error);
+  EXPECT_THROW(MovingPerson(MovingPersonOptions{}, kFocal, kDepthFactor,
+                            PersonCutout{image, cv::Mat::zeros(48, 64, CV_8UC1)}),
+               Error);
 }
 
 }  // namespace

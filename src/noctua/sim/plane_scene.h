@@ -1,7 +1,6 @@
 #pragma once
 
 #include <filesystem>
-
 #include <opencv2/core.hpp>
 
 namespace noctua::sim {
@@ -11,8 +10,8 @@ namespace noctua::sim {
 // intersection), written in TUM layout with its ground truth and a camera preset.
 struct PlaneSceneOptions {
   int num_frames = 30;
-  double wall_distance_m = 2.5;   // the wall is the plane z = wall_distance_m of the world
-  double wall_width_m = 5.0;      // the texture spans this width of the wall
+  double wall_distance_m = 2.5;  // the wall is the plane z = wall_distance_m of the world
+  double wall_width_m = 5.0;     // the texture spans this width of the wall
   double yaw_per_frame_deg = 0.4;
   double shift_per_frame_m = 0.01;
   double fps = 30.0;

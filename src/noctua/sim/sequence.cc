@@ -17,6 +17,10 @@ void SimulationOptions::Check() const {
   CheckOption(max_frames >= 0, "simulation max_frames must be 0 (all) or positive");
   sensor.Check();
   person_options.Check();
+  if (person_cutout) {
+    CheckOption(person, "a person cut-out is given but the person is off");
+    person_cutout->Check();
+  }
 }
 
 namespace {
@@ -60,8 +64,11 @@ SimulationReport SimulateSequence(const fs::path& input, const io::CameraConfig&
   }
   std::unique_ptr<MovingPerson> person;
   if (options.person) {
-    person = std::make_unique<MovingPerson>(options.person_options, camera.intrinsics.fy,
-                                            camera.depth_factor);
+    person = options.person_cutout
+                 ? std::make_unique<MovingPerson>(options.person_options, camera.intrinsics.fy,
+                                                  camera.depth_factor, *options.person_cutout)
+                 : std::make_unique<MovingPerson>(options.person_options, camera.intrinsics.fy,
+                                                  camera.depth_factor);
   }
   for (const char* folder : {"rgb", "depth", "mask"}) {
     if (std::string(folder) == "mask" && !person) continue;

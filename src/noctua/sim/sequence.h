@@ -3,6 +3,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <optional>
 #include <string>
 
 #include "noctua/io/camera_config.h"
@@ -15,6 +16,8 @@ struct SimulationOptions {
   double level = 1.0;   // mean grey left, relative to the original (1: no darkening)
   bool person = false;  // composite the walking person
   MovingPersonOptions person_options;
+  // A real person's appearance for the walk (see PersonCutout); none: the drawn silhouette.
+  std::optional<PersonCutout> person_cutout;
   SensorModel sensor;
   std::uint64_t seed = 1;  // noise seed (frame k uses seed + k)
   int max_frames = 0;      // 0: every frame of the input
