@@ -50,7 +50,7 @@ for target in "${targets[@]}"; do
   cp -n fuzz/corpus/"$target"/* "$work"/ 2>/dev/null || true
   log="$build_dir/fuzz_$target.log"
   echo "fuzz: $target for ${seconds}s (log $log)"
-  if ! "$build_dir/fuzz_$target" "$work" -max_total_time="$seconds" -max_len=4096 -timeout=20 \
+  if ! "$build_dir/fuzz/fuzz_$target" "$work" -max_total_time="$seconds" -max_len=4096 -timeout=20 \
       -rss_limit_mb=2048 -print_final_stats=1 -artifact_prefix="fuzz/crashes/$target/" \
       >"$log" 2>&1; then
     echo "fuzz: $target FOUND A CRASH (see $log and fuzz/crashes/$target/)"
@@ -58,7 +58,7 @@ for target in "${targets[@]}"; do
   fi
   grep -E "^stat::number_of_executed_units|^stat::peak_rss_mb|^#[0-9]+ +DONE" "$log" || true
   if ((update)); then
-    "$build_dir/fuzz_$target" -merge=1 -max_len=4096 "fuzz/corpus/$target" "$work" \
+    "$build_dir/fuzz/fuzz_$target" -merge=1 -max_len=4096 "fuzz/corpus/$target" "$work" \
       >>"$log" 2>&1
   fi
 done
