@@ -9,6 +9,7 @@
 #include "noctua/dynamic/coco.h"
 #include "noctua/dynamic/detector.h"
 #include "noctua/dynamic/dynamic_mask.h"
+#include "noctua/eval/eval_test_support.h"
 #include "noctua/eval/feature_eval.h"
 #include "noctua/sim/sequence.h"
 #include "noctua/testing/shared_data.h"
@@ -52,9 +53,7 @@ class PersonSequence : public ::testing::Test {
   }
   static void TearDownTestSuite() { fs::remove_all(dir_); }
 
-  static io::CameraConfig Camera() {
-    return io::ReadCameraConfig(fs::path(NOCTUA_SOURCE_DIR) / "config" / "tum_fr1.yaml");
-  }
+  static io::CameraConfig Camera() { return test_support::Fr1Camera(); }
   static std::unique_ptr<pipeline::FeatureMethod> PaperWithDetector() {
     pipeline::MethodConfig config;
     config.detector_model = (ModelsDir() / "yolov8n" / "yolov8n_head_f32.onnx").string();

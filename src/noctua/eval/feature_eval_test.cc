@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <opencv2/imgproc.hpp>
 
+#include "noctua/eval/eval_test_support.h"
 #include "noctua/sim/plane_scene.h"
 #include "noctua/sim/sequence.h"
 #include "noctua/testing/shared_data.h"
@@ -15,25 +16,9 @@ namespace {
 
 namespace fs = std::filesystem;
 
-io::CameraConfig Fr1Camera() {
-  return io::ReadCameraConfig(fs::path(NOCTUA_SOURCE_DIR) / "config" / "tum_fr1.yaml");
-}
-
-fs::path FreshDir(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("noctua_eval_test_" + name);
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
-
-std::vector<std::unique_ptr<pipeline::FeatureMethod>> Methods(
-    const std::vector<std::string>& names) {
-  std::vector<std::unique_ptr<pipeline::FeatureMethod>> methods;
-  for (const auto& name : names) {
-    methods.push_back(pipeline::CreateMethod(name, pipeline::MethodConfig{}));
-  }
-  return methods;
-}
+using test_support::Fr1Camera;
+using test_support::FreshDir;
+using test_support::Methods;
 
 TEST(MeanPerTenFrames, AveragesEachBlockIncludingAShortLastOne) {
   std::vector<FrameCount> counts;

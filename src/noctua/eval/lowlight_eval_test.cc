@@ -2,6 +2,7 @@
 
 #include <filesystem>
 
+#include "noctua/eval/eval_test_support.h"
 #include "noctua/eval/feature_eval.h"
 #include "noctua/sim/sequence.h"
 #include "noctua/testing/shared_data.h"
@@ -10,99 +11,67 @@ namespace noctua::eval {
 namespace {
 
 namespace fs = std::filesystem;
+using test_support::Fr1Camera;
+using test_support::FreshDir;
 
-io::CameraConfig Fr1Camera() {
-  return io::ReadCameraConfig(fs::path(NOCTUA_SOURCE_DIR) / "config" / "tum_fr1.yaml");
-}
+// orb, clahe-orb and paper on the first `frames` frames of fr1 darkened to `level` under the
+// sensor model, pairs (i, i + 20) every 4 frames.
+struct DarkRun {
+  FeatureEvalResult result;
+  int correct[3] = {0, 0, 0};  // at tau = 10 px, per method
+};
 
-fs::path FreshDir(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("noctua_eval_test_" + name);
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
-
-std::vector<std::unique_ptr<pipeline::FeatureMethod>> Methods(
-    const std::vector<std::string>& names) {
-  std::vector<std::unique_ptr<pipeline::FeatureMethod>> methods;
-  for (const auto& name : names) {
-    methods.push_back(pipeline::CreateMethod(name, pipeline::MethodConfig{}));
+DarkRun EvaluateDarkFr1(double level, int frames, const fs::path& report_dir = {}) {
+  const fs::path dark = FreshDir("dark" + std::to_string(static_cast<int>(level * 100)));
+  sim::SimulationOptions simulation;
+  simulation.level = level;
+  simulation.max_frames = frames;
+  const io::CameraConfig camera = Fr1Camera();
+  const sim::SimulationReport report = sim::SimulateSequence(
+      noctua::testing::DataDir() / "tum_fr1_rpy_200", camera, simulation, dark);
+  EXPECT_NEAR(report.measured_mean_ratio, level, 0.01);
+  const EvalSequence sequence(dark, camera);
+  auto methods = test_support::Methods({"orb", "clahe-orb", "paper"});
+  FeatureEvalOptions options;
+  options.pair_step = 4;
+  DarkRun run;
+  run.result = EvaluateFeatures(sequence, methods, options);
+  EXPECT_EQ(run.result.methods.size(), 3u);
+  EXPECT_EQ(run.result.methods[0].pairs.size(), static_cast<std::size_t>((frames - 21) / 4 + 1));
+  for (std::size_t m = 0; m < 3 && m < run.result.methods.size(); ++m) {
+    for (const auto& pair : run.result.methods[m].pairs) run.correct[m] += pair.correct[2];
   }
-  return methods;
-}
-
-int TotalCorrect(const MethodScore& score, std::size_t tau_index) {
-  int total = 0;
-  for (const auto& pair : score.pairs) total += pair.correct[tau_index];
-  return total;
+  ::testing::Test::RecordProperty("correct_at_10px", std::to_string(run.correct[0]) + " " +
+                                                         std::to_string(run.correct[1]) + " " +
+                                                         std::to_string(run.correct[2]));
+  if (!report_dir.empty()) WriteFeatureEvalReport(run.result, report_dir);
+  fs::remove_all(dark);
+  return run;
 }
 
 // Enhancement must give more correct matches than plain ORB in the dark. Measured
-// (docs/evaluation.md): at 15% (mean grey 23) over the first 80 frames, pairs (i, i + 20) every 4
-// frames, orb 7.2 correct matches per pair at 10 px, clahe-orb 11.3, paper 10.8; over the whole
-// 200 frames at 15% the three are within noise of each other. At 8% (mean grey ~12) orb keeps ~2
-// per pair over the whole sequence and clahe-orb and paper 4-5 times as many.
+// (docs/evaluation.md): at 15% (mean grey 23) over the first 80 frames, orb 7.2 correct matches
+// per pair at 10 px, clahe-orb 11.3, paper 10.8; over the whole 200 frames at 15% the three are
+// within noise of each other. At 8% (mean grey ~12) orb keeps ~2 per pair over the whole
+// sequence and clahe-orb and paper 4-5 times as many.
 TEST(EvaluateFeatures, EnhancedMethodsBeatOrbOnFr1DarkenedTo15Percent) {
-  const fs::path dark = FreshDir("dark15");
-  sim::SimulationOptions simulation;
-  simulation.level = 0.15;
-  simulation.max_frames = 80;
-  const io::CameraConfig camera = Fr1Camera();
-  const sim::SimulationReport report = sim::SimulateSequence(
-      noctua::testing::DataDir() / "tum_fr1_rpy_200", camera, simulation, dark);
-  EXPECT_NEAR(report.measured_mean_ratio, 0.15, 0.01);
-
-  const EvalSequence sequence(dark, camera);
-  auto methods = Methods({"orb", "clahe-orb", "paper"});
-  FeatureEvalOptions options;
-  options.pair_step = 4;
-  const FeatureEvalResult result = EvaluateFeatures(sequence, methods, options);
-  ASSERT_EQ(result.methods[0].pairs.size(), 15u);  // i = 0, 4, ..., 56 (+20 < 80)
-  const int orb = TotalCorrect(result.methods[0], 2);
-  const int clahe = TotalCorrect(result.methods[1], 2);
-  const int paper = TotalCorrect(result.methods[2], 2);
-  RecordProperty("correct_at_10px",
-                 std::to_string(orb) + " " + std::to_string(clahe) + " " + std::to_string(paper));
-  EXPECT_GT(clahe, orb);
-  EXPECT_GT(paper, orb);
-  EXPECT_GT(orb, 0);
-  fs::remove_all(dark);
+  const DarkRun run = EvaluateDarkFr1(0.15, 80);
+  EXPECT_GT(run.correct[1], run.correct[0]);
+  EXPECT_GT(run.correct[2], run.correct[0]);
+  EXPECT_GT(run.correct[0], 0);
 }
 
-TEST(EvaluateFeatures, EnhancedMethodsBeatOrbOnFr1DarkenedTo8Percent) {
-  const fs::path dark = FreshDir("dark8");
-  sim::SimulationOptions simulation;
-  simulation.level = 0.08;
-  simulation.max_frames = 48;
-  const io::CameraConfig camera = Fr1Camera();
-  const sim::SimulationReport report = sim::SimulateSequence(
-      noctua::testing::DataDir() / "tum_fr1_rpy_200", camera, simulation, dark);
-  EXPECT_NEAR(report.measured_mean_ratio, 0.08, 0.01);
-
-  const EvalSequence sequence(dark, camera);
-  auto methods = Methods({"orb", "clahe-orb", "paper"});
-  FeatureEvalOptions options;
-  options.pair_step = 4;
-  const FeatureEvalResult result = EvaluateFeatures(sequence, methods, options);
-  ASSERT_EQ(result.methods.size(), 3u);
-  ASSERT_EQ(result.methods[0].pairs.size(), 7u);  // i = 0, 4, ..., 24 (+20 < 48)
-  const int orb = TotalCorrect(result.methods[0], 2);
-  const int clahe = TotalCorrect(result.methods[1], 2);
-  const int paper = TotalCorrect(result.methods[2], 2);
-  RecordProperty("correct_at_10px",
-                 std::to_string(orb) + " " + std::to_string(clahe) + " " + std::to_string(paper));
-  EXPECT_GT(clahe, orb);
-  EXPECT_GT(paper, orb);
-  EXPECT_GT(orb, 0);
-
+TEST(EvaluateFeatures, EnhancedMethodsBeatOrbOnFr1DarkenedTo8PercentAndReport) {
   const fs::path out = FreshDir("dark8_report");
-  WriteFeatureEvalReport(result, out);
+  const DarkRun run = EvaluateDarkFr1(0.08, 48, out);
+  EXPECT_GT(run.correct[1], run.correct[0]);
+  EXPECT_GT(run.correct[2], run.correct[0]);
+  EXPECT_GT(run.correct[0], 0);
   for (const char* file : {"counts.csv", "counts_mean10.csv", "pairs.csv", "summary.md",
                            "summary.json", "counts.png", "counts_mean10.png", "correct_rate.png",
                            "errors.png", "matches_orb.png", "matches_paper.png"}) {
     EXPECT_TRUE(fs::is_regular_file(out / file)) << file;
   }
-  fs::remove_all(dark);
   fs::remove_all(out);
 }
 
