@@ -180,9 +180,6 @@ Extraction Extractor::ExtractWithMask(const cv::Mat& image, const cv::Mat& featu
   } else {
     stats.stages_skipped.push_back("nms-filter (disabled)");
   }
-  cv::Mat distance_to_edges;
-  if (edge_on)
-    TimeStage(stats, "edge-filter", [&] { distance_to_edges = DistanceToEdges(edge_map); });
 
   const std::vector<int> wanted = FeaturesPerLevel(fast, num_levels);
   for_each_level([&](LevelWork& level, int l) {
@@ -194,9 +191,8 @@ Extraction Extractor::ExtractWithMask(const cv::Mat& image, const cv::Mat& featu
     }
     level.counts[2] = static_cast<int>(points.size());
     if (edge_on) {
-      timed(level, "edge-filter", [&] {
-        FilterByEdgeDistance(points, scale, distance_to_edges, options_.edge_filter.radius_px);
-      });
+      timed(level, "edge-filter",
+            [&] { FilterByEdgeDistance(points, scale, edge_map, options_.edge_filter.radius_px); });
     }
     level.counts[3] = static_cast<int>(points.size());
     if (options_.nms_filter.enabled) {

@@ -1,6 +1,7 @@
 #include "noctua/features/filters.h"
 
 #include <algorithm>
+#include <cmath>
 #include <numeric>
 #include <opencv2/imgproc.hpp>
 
@@ -21,21 +22,41 @@ void FilterByMask(std::vector<cv::KeyPoint>& points, double scale, const cv::Mat
   });
 }
 
-cv::Mat DistanceToEdges(const cv::Mat& edge_map) {
+void FilterByEdgeDistance(std::vector<cv::KeyPoint>& points, double scale, const cv::Mat& edge_map,
+                          double radius_px) {
   CV_Assert(edge_map.type() == CV_8UC1);
-  cv::Mat non_edge = edge_map == 0;
-  cv::Mat distance;
-  cv::distanceTransform(non_edge, distance, cv::DIST_L2, cv::DIST_MASK_5);
-  return distance;
-}
-
-void FilterByEdgeDistance(std::vector<cv::KeyPoint>& points, double scale,
-                          const cv::Mat& distance_to_edges, double radius_px) {
-  CV_Assert(distance_to_edges.type() == CV_32FC1);
-  const float limit = static_cast<float>(radius_px * scale);
+  const double limit = radius_px * scale;
+  const double limit_squared = limit * limit;
+  const int reach = static_cast<int>(std::floor(limit));
+  // half_width[|dy|]: the largest dx with dx^2 + dy^2 <= limit^2, so that the pixels looked at are
+  // exactly the disc of radius `limit` around the point.
+  std::vector<int> half_width(static_cast<std::size_t>(reach) + 1);
+  for (int dy = 0; dy <= reach; ++dy) {
+    int w = static_cast<int>(std::floor(std::sqrt(std::max(limit_squared - dy * dy, 0.0))));
+    while (w > 0 && static_cast<double>(w * w + dy * dy) > limit_squared) --w;
+    while (static_cast<double>((w + 1) * (w + 1) + dy * dy) <= limit_squared) ++w;
+    half_width[static_cast<std::size_t>(dy)] = w;
+  }
+  const int rows = edge_map.rows;
+  const int cols = edge_map.cols;
+  auto edge_in_row = [&](int y, int x, int dy) {
+    if (y < 0 || y >= rows) return false;
+    const int w = half_width[static_cast<std::size_t>(std::abs(dy))];
+    const uchar* row = edge_map.ptr<uchar>(y);
+    const int end = std::min(x + w, cols - 1);
+    for (int c = std::max(x - w, 0); c <= end; ++c) {
+      if (row[c] != 0) return true;
+    }
+    return false;
+  };
   std::erase_if(points, [&](const cv::KeyPoint& point) {
-    return distance_to_edges.at<float>(ToLevelZeroPixel(point, scale, distance_to_edges.size())) >
-           limit;
+    const cv::Point p = ToLevelZeroPixel(point, scale, edge_map.size());
+    // Nearest rows first: most kept points have an edge pixel within a row or two.
+    if (edge_in_row(p.y, p.x, 0)) return false;
+    for (int dy = 1; dy <= reach; ++dy) {
+      if (edge_in_row(p.y - dy, p.x, dy) || edge_in_row(p.y + dy, p.x, dy)) return false;
+    }
+    return true;
   });
 }
 

@@ -18,13 +18,11 @@ cv::Point ToLevelZeroPixel(const cv::KeyPoint& point, double scale, const cv::Si
 void FilterByMask(std::vector<cv::KeyPoint>& points, double scale, const cv::Mat& mask,
                   bool drop_where_set);
 
-// Distance (level-0 pixels, CV_32F) from every pixel to the nearest non-zero pixel of a CV_8U
-// edge map. Computed once per frame and shared by all levels.
-cv::Mat DistanceToEdges(const cv::Mat& edge_map);
-
-// Keeps points within `radius_px` (pixels of their own level) of an edge.
-void FilterByEdgeDistance(std::vector<cv::KeyPoint>& points, double scale,
-                          const cv::Mat& distance_to_edges, double radius_px);
+// Keeps points with an edge pixel (non-zero in the CV_8U level-0 `edge_map`) within `radius_px`
+// pixels of their own level, that is radius_px * scale level-0 pixels (Euclidean), of their
+// level-0 pixel. Looks only at that disc around each point: no per-frame map is needed.
+void FilterByEdgeDistance(std::vector<cv::KeyPoint>& points, double scale, const cv::Mat& edge_map,
+                          double radius_px);
 
 // Keeps, within every window x window neighbourhood of one level, only the point with the highest
 // response (ties: the first one seen). Points must all belong to one level of size `level_size`.

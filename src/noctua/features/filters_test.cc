@@ -2,6 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <opencv2/core.hpp>
+
 namespace noctua::features {
 namespace {
 
@@ -30,16 +33,54 @@ TEST(FilterByMask, DropsWhereSetOrWhereClearAtLevelZeroPosition) {
 TEST(FilterByEdgeDistance, KeepsPointsWithinTheScaledRadius) {
   cv::Mat edges(100, 100, CV_8UC1, cv::Scalar(0));
   edges.col(50).setTo(255);
-  const cv::Mat distance = DistanceToEdges(edges);
-  EXPECT_NEAR(distance.at<float>(0, 47), 3.0f, 0.05f);
   std::vector<cv::KeyPoint> points = {At(50, 10, 1), At(48, 10, 1), At(47, 10, 1), At(10, 10, 1)};
-  FilterByEdgeDistance(points, 1.0, distance, 2.0);
+  FilterByEdgeDistance(points, 1.0, edges, 2.0);
   ASSERT_EQ(points.size(), 2u);
-  // At level 2 (scale 1.44) the same radius covers 2.88 level-0 pixels: x=47*1.0 is not at level 2,
-  // so test a level-2 point whose level-0 position is 3 px away: rejected at radius 2, kept at 2.1.
+  // At level 2 (scale 1.44) a radius of 2 covers 2.88 level-0 pixels and 2.1 covers 3.02: a level-2
+  // point 3 level-0 pixels from the edge is rejected by the first and kept by the second.
   std::vector<cv::KeyPoint> coarse = {At(47.0f / 1.44f, 10, 1, 2)};
-  FilterByEdgeDistance(coarse, 1.44, distance, 2.1);
+  FilterByEdgeDistance(coarse, 1.44, edges, 2.0);
+  EXPECT_TRUE(coarse.empty());
+  coarse = {At(47.0f / 1.44f, 10, 1, 2)};
+  FilterByEdgeDistance(coarse, 1.44, edges, 2.1);
   EXPECT_EQ(coarse.size(), 1u);
+}
+
+TEST(FilterByEdgeDistance, RowsWithoutEdgesAndAnEmptyMapKeepNothing) {
+  const cv::Mat none(40, 60, CV_8UC1, cv::Scalar(0));
+  std::vector<cv::KeyPoint> points = {At(5, 5, 1), At(30, 20, 1)};
+  FilterByEdgeDistance(points, 1.0, none, 50.0);
+  EXPECT_TRUE(points.empty());
+}
+
+// Against the definition: a point is kept when some edge pixel lies within radius * scale
+// (Euclidean) of its level-0 pixel, on random sparse edge maps, radii and levels.
+TEST(FilterByEdgeDistance, MatchesTheEuclideanDistanceToTheNearestEdgePixel) {
+  cv::RNG rng(7);
+  for (int trial = 0; trial < 20; ++trial) {
+    cv::Mat noise(120, 160, CV_32FC1);
+    rng.fill(noise, cv::RNG::UNIFORM, 0.0, 1.0);
+    const cv::Mat edges = noise > 0.985;  // ~1.5% edge pixels, many empty neighbourhoods
+    std::vector<cv::Point> edge_pixels;
+    cv::findNonZero(edges, edge_pixels);
+    const double scale = std::pow(1.2, rng.uniform(0, 8));
+    const double radius = rng.uniform(0.5, 4.0);
+    std::vector<cv::KeyPoint> points;
+    for (int i = 0; i < 300; ++i) {
+      points.push_back(At(rng.uniform(0.0f, 159.0f / static_cast<float>(scale)),
+                          rng.uniform(0.0f, 119.0f / static_cast<float>(scale)), 1));
+    }
+    std::vector<cv::KeyPoint> expected;
+    for (const auto& point : points) {
+      const cv::Point p = ToLevelZeroPixel(point, scale, edges.size());
+      double nearest = 1e9;
+      for (const cv::Point& e : edge_pixels) nearest = std::min(nearest, cv::norm(e - p));
+      if (nearest <= radius * scale) expected.push_back(point);
+    }
+    FilterByEdgeDistance(points, scale, edges, radius);
+    ASSERT_EQ(points.size(), expected.size()) << "trial " << trial;
+    for (std::size_t i = 0; i < points.size(); ++i) EXPECT_EQ(points[i].pt, expected[i].pt);
+  }
 }
 
 TEST(SuppressNonMaxima, KeepsTheStrongestInEachWindow) {
