@@ -14,8 +14,10 @@ namespace noctua::dynamic {
 
 struct AsyncMaskOptions {
   // Run the detector on every N-th frame (0, N, 2N, ...); the frames between reuse the last mask.
-  // 1 = every frame, exact masks.
-  int every_n = 1;
+  // 1 = every frame, exact masks. Default 3: YOLOv8n costs about twice a `paper` extraction, so
+  // detecting every frame caps a 2-core sequence near the detector's own rate; every 3rd frame
+  // keeps a carried mask at most two frames (67 ms at 30 Hz) old (docs/dynamic.md, dynamic_bench).
+  int every_n = 3;
   void Check() const;
 };
 

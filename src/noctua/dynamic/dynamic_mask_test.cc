@@ -146,7 +146,7 @@ TEST_F(Fr3Test, AsyncMasksEqualSynchronousOnesAndCarryOver) {
   std::vector<cv::Mat> expected;
   for (size_t i = 0; i < 6; ++i) expected.push_back(source((*frames_)[i]));
   {
-    AsyncMaskPipeline every(shared, table, options);
+    AsyncMaskPipeline every(shared, table, options, AsyncMaskOptions{1});
     every.Submit((*frames_)[0]);
     for (size_t i = 0; i < 6; ++i) {
       if (i + 1 < 6) every.Submit((*frames_)[i + 1]);
@@ -168,7 +168,7 @@ TEST_F(Fr3Test, AsyncMasksEqualSynchronousOnesAndCarryOver) {
 TEST_F(Fr3Test, AsyncMasksPassOnDetectionErrors) {
   auto shared =
       std::shared_ptr<Detector>(LoadDetector(ModelsDir() / "yolov8n" / "yolov8n_head_f32.onnx"));
-  AsyncMaskPipeline masks(shared, MotionLevelTable(), DynamicMaskOptions());
+  AsyncMaskPipeline masks(shared, MotionLevelTable(), DynamicMaskOptions(), AsyncMaskOptions{1});
   masks.Submit(cv::Mat(8, 8, CV_16UC1, cv::Scalar(0)));
   masks.Submit((*frames_)[0]);
   EXPECT_THROW(masks.Next(), Error);
