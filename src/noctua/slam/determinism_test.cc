@@ -1,6 +1,7 @@
 // Determinism: the same sequence and settings give the same trajectory and the same ATE, run
-// after run and with 1 or 2 OpenCV threads (the extractor's pyramid, FAST and phase-congruency
-// edges use cv::parallel_for_; Ceres runs single-threaded).
+// after run, with 1 or 2 OpenCV threads (the extractor's pyramid, FAST and phase-congruency
+// edges use cv::parallel_for_; Ceres runs single-threaded), and whether the next frame is
+// extracted while this one is tracked or after it.
 #include <gtest/gtest.h>
 
 #include <opencv2/core.hpp>
@@ -19,13 +20,14 @@ struct Outcome {
 };
 
 Outcome RunWithThreads(const io::Sequence& sequence, const SlamSetup& setup,
-                       const std::string& method_name, int threads) {
+                       const std::string& method_name, int threads, bool overlap = true) {
   const int previous = cv::getNumThreads();
   cv::setNumThreads(threads);
   pipeline::MethodConfig config;
   const auto method = pipeline::CreateMethod(method_name, config);
   RunOptions options;
   options.max_frames = 20;
+  options.overlap_extraction = overlap;
   const SequenceRun run = RunSequence(sequence, setup.camera.depth_factor, setup.camera.Camera(),
                                       method->feature2d(), setup.options, options);
   cv::setNumThreads(previous);
@@ -47,7 +49,7 @@ void ExpectIdentical(const Outcome& a, const Outcome& b, const std::string& what
 
 class DeterminismTest : public ::testing::TestWithParam<std::string> {};
 
-TEST_P(DeterminismTest, SameTrajectoryAndAteRunAfterRunAndWithOneOrTwoThreads) {
+TEST_P(DeterminismTest, SameTrajectoryAndAteRunAfterRunWithOneOrTwoThreadsOverlappedOrNot) {
   const io::Sequence sequence = io::Sequence::Open(testing::DataDir() / "tum_fr1_rpy_200");
   const SlamSetup setup =
       LoadSlamSetup(std::filesystem::path(NOCTUA_SOURCE_DIR) / "config/tum_fr1.yaml");
@@ -55,6 +57,8 @@ TEST_P(DeterminismTest, SameTrajectoryAndAteRunAfterRunAndWithOneOrTwoThreads) {
   ASSERT_GE(first.trajectory.size(), 15u);
   ExpectIdentical(first, RunWithThreads(sequence, setup, GetParam(), 1), "second run, 1 thread");
   ExpectIdentical(first, RunWithThreads(sequence, setup, GetParam(), 2), "2 threads");
+  ExpectIdentical(first, RunWithThreads(sequence, setup, GetParam(), 2, /*overlap=*/false),
+                  "extraction not overlapped with tracking");
 }
 
 INSTANTIATE_TEST_SUITE_P(Methods, DeterminismTest, ::testing::Values("orb", "paper"));

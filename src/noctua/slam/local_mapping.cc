@@ -75,7 +75,7 @@ void LocalMapper::Fuse(KeyFrame* keyframe, const std::vector<MapPoint*>& points,
     if (best_index < 0 || best_distance > Matcher::kThresholdLow) continue;
     MapPoint* existing = keyframe->map_point(best_index);
     if (existing != nullptr && !existing->bad()) {
-      if (existing->num_observations() > point->num_observations()) {
+      if (existing->weighted_observations() > point->weighted_observations()) {
         point->Replace(existing);
       } else {
         existing->Replace(point);
@@ -125,8 +125,9 @@ void LocalMapper::CullRecentPoints(const KeyFrame* keyframe) {
     } else if (point->FoundRatio() < 0.25) {
       point->SetBad();
       it = recent_points_.erase(it);
-    } else if (age >= 2 && point->num_observations() <= 1) {
-      // ORB-SLAM: an RGB-D point still seen by one keyframe only, two keyframes later.
+    } else if (age >= 2 && point->weighted_observations() <= 3) {
+      // ORB-SLAM: a point still seen by one keyframe with depth (or one with and one without)
+      // two keyframes later.
       point->SetBad();
       it = recent_points_.erase(it);
     } else if (age >= 3) {
@@ -149,7 +150,7 @@ void LocalMapper::CullRedundantKeyFrames(KeyFrame* keyframe) {
       const double depth = candidate->features().depth(i);
       if (depth <= 0.0 || depth > options_.close_depth_m) continue;
       ++close_points;
-      if (point->num_observations() <= kObservers) continue;
+      if (point->weighted_observations() <= kObservers) continue;
       const int level = candidate->features().octave(i);
       int observers = 0;
       for (const auto& [other, index] : point->observations()) {

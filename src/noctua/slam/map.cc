@@ -12,14 +12,27 @@ bool KeyFrameIdLess::operator()(const KeyFrame* a, const KeyFrame* b) const {
 MapPoint::MapPoint(long id, const Eigen::Vector3d& position, KeyFrame* reference)
     : id_(id), position_(position), reference_(reference), first_keyframe_id_(reference->id()) {}
 
+namespace {
+
+int ObservationWeight(const KeyFrame* keyframe, int index) {
+  return keyframe->features().depth(index) > 0.0 ? 2 : 1;
+}
+
+}  // namespace
+
 void MapPoint::AddObservation(KeyFrame* keyframe, int index) {
-  observations_.emplace(keyframe, index);
+  if (observations_.emplace(keyframe, index).second) {
+    weighted_observations_ += ObservationWeight(keyframe, index);
+  }
 }
 
 void MapPoint::EraseObservation(KeyFrame* keyframe) {
-  if (observations_.erase(keyframe) == 0) return;
+  const auto found = observations_.find(keyframe);
+  if (found == observations_.end()) return;
+  weighted_observations_ -= ObservationWeight(keyframe, found->second);
+  observations_.erase(found);
   if (reference_ == keyframe && !observations_.empty()) reference_ = observations_.begin()->first;
-  if (observations_.size() < 2) SetBad();
+  if (weighted_observations_ <= 2) SetBad();
 }
 
 void MapPoint::SetBad() {
@@ -27,12 +40,14 @@ void MapPoint::SetBad() {
   bad_ = true;
   for (const auto& [keyframe, index] : observations_) keyframe->SetMapPoint(index, nullptr);
   observations_.clear();
+  weighted_observations_ = 0;
 }
 
 void MapPoint::Replace(MapPoint* other) {
   if (other == this || bad_ || other->bad()) return;
   const auto observations = observations_;
   observations_.clear();
+  weighted_observations_ = 0;
   bad_ = true;
   replaced_by_ = other;
   for (const auto& [keyframe, index] : observations) {
@@ -119,7 +134,9 @@ int KeyFrame::IndexOf(const MapPoint* point) const {
 int KeyFrame::TrackedMapPoints(int min_observations) const {
   int count = 0;
   for (const MapPoint* point : map_points_) {
-    if (point != nullptr && !point->bad() && point->num_observations() >= min_observations) ++count;
+    if (point != nullptr && !point->bad() && point->weighted_observations() >= min_observations) {
+      ++count;
+    }
   }
   return count;
 }

@@ -37,8 +37,13 @@ class MapPoint {
 
   const std::map<KeyFrame*, int, KeyFrameIdLess>& observations() const { return observations_; }
   int num_observations() const { return static_cast<int>(observations_.size()); }
+  // ORB-SLAM's observation count (nObs): an observation whose keypoint has depth counts twice,
+  // since it constrains the point like a stereo pair. ORB-SLAM's thresholds (culling, tracked
+  // points of the reference keyframe, fusion) are in this unit.
+  int weighted_observations() const { return weighted_observations_; }
   void AddObservation(KeyFrame* keyframe, int index);
-  // Removes one observation; a point left with fewer than two keyframes is marked bad.
+  // Removes one observation; a point left with a weight of 2 or less (one observation with depth,
+  // or two without) is marked bad, as in ORB-SLAM.
   void EraseObservation(KeyFrame* keyframe);
   // Marks the point bad and removes it from every keyframe that observes it.
   void SetBad();
@@ -82,6 +87,7 @@ class MapPoint {
   double min_distance_ = 0.0;
   double max_distance_ = 0.0;
   MapPoint* replaced_by_ = nullptr;
+  int weighted_observations_ = 0;
   int visible_ = 1;
   int found_ = 1;
   bool bad_ = false;
@@ -105,7 +111,7 @@ class KeyFrame {
   MapPoint* map_point(int i) const { return map_points_[static_cast<std::size_t>(i)]; }
   void SetMapPoint(int i, MapPoint* point) { map_points_[static_cast<std::size_t>(i)] = point; }
   int IndexOf(const MapPoint* point) const;
-  // Good map points observed by at least `min_observations` keyframes.
+  // Good map points whose weighted_observations() reach `min_observations` (ORB-SLAM's count).
   int TrackedMapPoints(int min_observations) const;
 
   // Recomputes covisibility from shared map points (ORB-SLAM: links of weight >= 15, or the

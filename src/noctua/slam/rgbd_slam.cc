@@ -1,5 +1,7 @@
 #include "noctua/slam/rgbd_slam.h"
 
+#include <future>
+
 #include "noctua/util/error.h"
 #include "noctua/util/timer.h"
 
@@ -13,6 +15,11 @@ RgbdSlam::RgbdSlam(const geometry::PinholeCamera& camera, cv::Ptr<cv::Feature2D>
 }
 
 TrackResult RgbdSlam::Process(const cv::Mat& image, const cv::Mat& depth_m, double timestamp) {
+  return Track(Extract(image, depth_m, timestamp));
+}
+
+RgbdSlam::Extracted RgbdSlam::Extract(const cv::Mat& image, const cv::Mat& depth_m,
+                                      double timestamp) {
   if (image.empty() || image.size() != camera_.size()) {
     throw Error("slam: image of " + std::to_string(image.cols) + "x" + std::to_string(image.rows) +
                 " does not match the camera's " + std::to_string(camera_.width()) + "x" +
@@ -25,12 +32,19 @@ TrackResult RgbdSlam::Process(const cv::Mat& image, const cv::Mat& depth_m, doub
   std::vector<cv::KeyPoint> keypoints;
   cv::Mat descriptors;
   extractor_->detectAndCompute(image, cv::noArray(), keypoints, descriptors);
-  const double extract_ms = watch.ElapsedMs();
-  const int keypoint_count = static_cast<int>(keypoints.size());
-  auto features = std::make_shared<const FrameFeatures>(std::move(keypoints), descriptors, depth_m,
-                                                        camera_, options_.bf, options_.min_depth_m);
-  TrackResult result = tracker_.Track(Frame(next_frame_id_++, timestamp, std::move(features)));
-  result.stage_ms["extract"] = extract_ms;
+  Extracted extracted;
+  extracted.features = std::make_shared<const FrameFeatures>(
+      std::move(keypoints), descriptors, depth_m, camera_, options_.bf, options_.min_depth_m);
+  extracted.timestamp = timestamp;
+  extracted.extract_ms = watch.ElapsedMs();
+  return extracted;
+}
+
+TrackResult RgbdSlam::Track(Extracted extracted) {
+  const int keypoint_count = extracted.features->size();
+  TrackResult result =
+      tracker_.Track(Frame(next_frame_id_++, extracted.timestamp, std::move(extracted.features)));
+  result.stage_ms["extract"] = extracted.extract_ms;
   result.keypoints = keypoint_count;
   return result;
 }
@@ -52,27 +66,52 @@ SequenceRun RunSequence(const io::Sequence& sequence, double depth_factor,
   const int count = run_options.max_frames > 0
                         ? std::min(run_options.max_frames, static_cast<int>(sequence.size()))
                         : static_cast<int>(sequence.size());
+  struct Prepared {
+    RgbdSlam::Extracted extracted;
+    double load_ms = 0.0;
+  };
+  const auto prepare = [&](int i) {
+    Stopwatch watch;
+    const io::Frame& frame = sequence.frame(static_cast<std::size_t>(i));
+    io::FrameImages images = sequence.Load(frame, depth_factor);
+    if (run_options.transform_image) images.bgr = run_options.transform_image(i, images.bgr);
+    Prepared prepared;
+    prepared.load_ms = watch.ElapsedMs();
+    prepared.extracted = slam.Extract(images.bgr, images.depth_m, frame.timestamp);
+    return prepared;
+  };
   SequenceRun run;
   bool started = false;
+  const Stopwatch run_watch;
+  std::future<Prepared> next;
+  // A pending extraction is waited for on every exit, an exception included, before `slam`
+  // (which it uses) goes away.
+  struct WaitOnExit {
+    std::future<Prepared>& future;
+    ~WaitOnExit() {
+      if (future.valid()) future.wait();
+    }
+  } wait_on_exit{next};
   for (int i = 0; i < count; ++i) {
     if (run_options.stop && run_options.stop()) {
       run.interrupted = true;
       break;
     }
     Stopwatch total;
-    const io::Frame& frame = sequence.frame(static_cast<std::size_t>(i));
-    io::FrameImages images = sequence.Load(frame, depth_factor);
-    if (run_options.transform_image) images.bgr = run_options.transform_image(i, images.bgr);
-    const double load_ms = total.ElapsedMs();
-    const TrackResult result = slam.Process(images.bgr, images.depth_m, frame.timestamp);
+    Prepared prepared = next.valid() ? next.get() : prepare(i);
+    if (run_options.overlap_extraction && i + 1 < count) {
+      next = std::async(std::launch::async, prepare, i + 1);
+    }
+    const double timestamp = prepared.extracted.timestamp;
+    const TrackResult result = slam.Track(std::move(prepared.extracted));
     FrameOutcome outcome;
-    outcome.timestamp = frame.timestamp;
+    outcome.timestamp = timestamp;
     outcome.state = result.state;
     outcome.method = result.method;
     outcome.inliers = result.inliers;
     outcome.new_keyframe = result.new_keyframe;
     outcome.stage_ms = result.stage_ms;
-    outcome.stage_ms["load"] = load_ms;
+    outcome.stage_ms["load"] = prepared.load_ms;
     outcome.stage_ms["total"] = total.ElapsedMs();
     outcome.keypoints = result.keypoints;
     if (result.state != TrackingState::kNotInitialised) started = true;
@@ -80,6 +119,7 @@ SequenceRun RunSequence(const io::Sequence& sequence, double depth_factor,
     run.frames.push_back(outcome);
     if (run_options.progress) run_options.progress(i, count, run.frames.back());
   }
+  run.wall_s = run_watch.ElapsedMs() / 1000.0;
   run.trajectory = slam.Trajectory();
   run.keyframes = slam.tracker().map().NumKeyFrames();
   run.map_points = slam.tracker().map().NumMapPoints();

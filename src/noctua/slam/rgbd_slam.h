@@ -24,7 +24,19 @@ class RgbdSlam {
 
   // Tracks one frame: colour (8-bit BGR or grey) and depth in metres (CV_32F, registered to the
   // colour image, 0 = none). Throws noctua::Error when the images do not fit the camera.
+  // Same as Track(Extract(image, depth_m, timestamp)).
   TrackResult Process(const cv::Mat& image, const cv::Mat& depth_m, double timestamp);
+
+  // The two halves of Process, so that a caller can extract the next frame on another thread
+  // while this one is tracked (one Extract at a time: the extractor keeps buffers). Extract
+  // touches no tracking state, so the result does not depend on how the two overlap.
+  struct Extracted {
+    std::shared_ptr<const FrameFeatures> features;
+    double timestamp = 0.0;
+    double extract_ms = 0.0;
+  };
+  Extracted Extract(const cv::Mat& image, const cv::Mat& depth_m, double timestamp);
+  TrackResult Track(Extracted extracted);
 
   // T_world_camera of every tracked frame (lost frames and frames before the map exist are
   // left out rather than guessed), with the latest keyframe poses.
@@ -47,7 +59,9 @@ struct FrameOutcome {
   int keypoints = 0;
   int inliers = 0;
   bool new_keyframe = false;
-  std::map<std::string, double> stage_ms;  // load, extract, track, local_map, mapping, total
+  // load, extract, track, local_map, mapping, and total: the wall time of the frame's iteration
+  // (with overlapped extraction, the time the SLAM waited for it plus its own work).
+  std::map<std::string, double> stage_ms;
 };
 
 struct SequenceRun {
@@ -57,6 +71,10 @@ struct SequenceRun {
   int keyframes = 0;
   int map_points = 0;
   bool interrupted = false;  // RunOptions::stop ended the run before the last frame
+  double wall_s = 0.0;       // whole run, loading included
+  double FramesPerSecond() const {
+    return wall_s > 0.0 ? static_cast<double>(frames.size()) / wall_s : 0.0;
+  }
 };
 
 struct RunOptions {
@@ -68,6 +86,10 @@ struct RunOptions {
   // Checked before every frame; when it returns true the run ends there and returns what was
   // tracked so far (e.g. on Ctrl-C, so the trajectory up to that point is not lost).
   std::function<bool()> stop;
+  // Load and extract frame i + 1 on a second thread while frame i is tracked (same results: the
+  // extraction of a frame does not depend on tracking). Off: one thread, stage by stage.
+  // transform_image is then called on that thread.
+  bool overlap_extraction = true;
 };
 
 // Runs the SLAM over a sequence with the given depth factor (DepthMapFactor).
