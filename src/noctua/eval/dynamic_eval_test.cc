@@ -39,9 +39,7 @@ sim::PersonCutout Fr3PersonCutout() {
 class PersonSequence : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    dir_ = fs::temp_directory_path() / "noctua_dynamic_eval_test";
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
+    dir_ = test_support::FreshDir("person");
     sim::SimulationOptions options;
     options.person = true;
     options.person_cutout = Fr3PersonCutout();

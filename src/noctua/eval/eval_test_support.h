@@ -1,6 +1,8 @@
 // Fixtures shared by the evaluation tests (test-only; NOCTUA_SOURCE_DIR is defined for them).
 #pragma once
 
+#include <unistd.h>
+
 #include <filesystem>
 #include <memory>
 #include <string>
@@ -16,10 +18,11 @@ inline io::CameraConfig Fr1Camera() {
   return io::ReadCameraConfig(std::filesystem::path(NOCTUA_SOURCE_DIR) / "config" / "tum_fr1.yaml");
 }
 
-// An empty folder of that name under the system's temporary folder.
+// An empty folder of that name, private to this process (ctest runs each test in its own
+// process, several at a time), under the system's temporary folder.
 inline std::filesystem::path FreshDir(const std::string& name) {
-  const std::filesystem::path dir =
-      std::filesystem::temp_directory_path() / ("noctua_eval_test_" + name);
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() /
+                                    ("noctua_eval_test_" + name + "_" + std::to_string(::getpid()));
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir;
