@@ -6,9 +6,13 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
 
 #include "cli_runner.h"
 #include "noctua/testing/shared_data.h"
@@ -299,6 +303,100 @@ TEST_F(CliTest, SimulateCompositesARealPersonCutOutGivenByAMaskOrFoundByTheSegme
                 " --out " + (dir_ / "d").string());
   EXPECT_EQ(not_seg.exit_code, 1);
   EXPECT_THAT(not_seg.output, HasSubstr("not a segmentation model"));
+}
+
+// Every number in a bench row must be a positive measurement; timings themselves are never
+// asserted.
+void ExpectPositiveRow(const nlohmann::json& row) {
+  for (const char* key :
+       {"median_ms", "spread_min_ms", "spread_max_ms", "ratio_to_orb_opencv", "samples"}) {
+    ASSERT_TRUE(row.contains(key)) << row["name"] << " " << key;
+    EXPECT_GT(row[key].get<double>(), 0.0) << row["name"] << " " << key;
+  }
+  EXPECT_LE(row["spread_min_ms"].get<double>(), row["spread_max_ms"].get<double>()) << row["name"];
+}
+
+TEST_F(CliTest, BenchWritesATableJsonAndPlotWithEveryStageAndMethod) {
+  const auto out = dir_ / "bench";
+  const CommandResult result = RunNoctua("bench --frames 3 --repeat 1 --out " + out.string());
+  ASSERT_EQ(result.exit_code, 0) << result.output;
+  std::ifstream in(out / "bench.json");
+  const auto report = nlohmann::json::parse(in);
+  EXPECT_EQ(report["frames"], 3);
+  EXPECT_EQ(report["repeat"], 1);
+  EXPECT_GT(report["reference"]["median_ms"].get<double>(), 0.0);
+  std::vector<std::string> methods;
+  for (const auto& row : report["methods"]) {
+    methods.push_back(row["name"]);
+    ExpectPositiveRow(row);
+    EXPECT_GT(row["frames_per_s"].get<double>(), 0.0);
+  }
+  EXPECT_THAT(methods, ::testing::IsSupersetOf({"fast", "orb-opencv", "orb", "he-orb", "clahe-orb",
+                                                "paper", "sift", "surf", "slam (paper)"}));
+  std::vector<std::string> stages;
+  for (const auto& row : report["stages"]) {
+    stages.push_back(row["name"]);
+    ExpectPositiveRow(row);
+  }
+  EXPECT_THAT(stages, ::testing::IsSupersetOf(
+                          {"grey conversion", "CLAHE", "pyramid (8 levels)",
+                           "oFAST (grid FAST, all levels)", "orientation (intensity centroid)",
+                           "phase congruency edge map",
+                           "filter (b): on an edge (distance map + test)", "filter (c): 3x3 NMS",
+                           "rBRIEF descriptors", "matching (2-NN + ratio 0.8, consecutive frames)",
+                           "slam: track local map (incl. pose optimisation)"}));
+  // The Markdown table has one row per JSON row, and the plot is a real PNG.
+  std::ifstream markdown_in(out / "bench.md");
+  const std::string markdown((std::istreambuf_iterator<char>(markdown_in)),
+                             std::istreambuf_iterator<char>());
+  for (const auto& name : methods) EXPECT_THAT(markdown, HasSubstr("| " + name + " | "));
+  for (const auto& name : stages) EXPECT_THAT(markdown, HasSubstr("| " + name + " | "));
+  const cv::Mat plot = cv::imread((out / "bench.png").string());
+  EXPECT_GT(plot.cols, 100);
+  // Its results are not overwritten without --force.
+  const CommandResult again = RunNoctua("bench --frames 3 --repeat 1 --out " + out.string());
+  EXPECT_EQ(again.exit_code, 1);
+  const CommandResult bad = RunNoctua("bench --frames 1 --out " + (dir_ / "b1").string());
+  EXPECT_EQ(bad.exit_code, 1);
+  EXPECT_THAT(bad.output, HasSubstr("--frames"));
+}
+
+// The SLAM report carries peak memory and the map size, and frames.csv the memory and map size
+// after every frame, so that growth can be set against the map.
+TEST_F(CliTest, SlamReportsMemoryAndMapSize) {
+  const auto out = dir_ / "slam";
+  const CommandResult result =
+      RunNoctua("slam --dataset " + (noctua::testing::DataDir() / "tum_fr1_rpy_200").string() +
+                " --config " + std::string(NOCTUA_SOURCE_DIR) +
+                "/config/tum_fr1.yaml --method orb --max-frames 12 --out " + out.string());
+  ASSERT_EQ(result.exit_code, 0) << result.output;
+  std::ifstream in(out / "report.json");
+  const auto report = nlohmann::json::parse(in);
+  const auto& memory = report["memory"];
+  EXPECT_GT(memory["peak_rss_mb"].get<double>(), 10.0);
+  EXPECT_GE(memory["peak_rss_mb"].get<double>(), memory["final_rss_mb"].get<double>() - 0.5);
+  EXPECT_EQ(memory["keyframes"], report["keyframes"]);
+  EXPECT_EQ(memory["map_points"], report["map_points"]);
+  EXPECT_GT(report["map_points"].get<int>(), 100);
+  std::ifstream csv(out / "frames.csv");
+  std::string line;
+  std::getline(csv, line);
+  EXPECT_THAT(line, HasSubstr(",keyframes,map_points,rss_mb,"));
+  int rows = 0;
+  std::string last;
+  while (std::getline(csv, line)) {
+    ++rows;
+    last = line;
+  }
+  EXPECT_EQ(rows, 12);
+  // The last row's map size is the report's: columns 8 and 9 (keyframes, map_points).
+  std::vector<std::string> cells;
+  std::stringstream cells_in(last);
+  for (std::string cell; std::getline(cells_in, cell, ',');) cells.push_back(cell);
+  ASSERT_GT(cells.size(), 9u);
+  EXPECT_EQ(std::stoi(cells[7]), report["keyframes"].get<int>());
+  EXPECT_EQ(std::stoi(cells[8]), report["map_points"].get<int>());
+  EXPECT_GT(std::stod(cells[9]), 10.0);
 }
 
 }  // namespace

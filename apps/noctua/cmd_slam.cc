@@ -13,6 +13,7 @@
 #include "noctua/io/dataset.h"
 #include "noctua/slam/rgbd_slam.h"
 #include "noctua/util/error.h"
+#include "noctua/util/memory_usage.h"
 #include "noctua/util/timer.h"
 #include "output_dir.h"
 
@@ -66,16 +67,21 @@ const char* StateName(slam::TrackingState state) {
   return "unknown";
 }
 
-std::string FramesCsv(const slam::SequenceRun& run, const std::vector<std::string>& stages) {
-  std::string csv = "frame,timestamp,state,method,keypoints,inliers,keyframe";
+// `rss_mb` holds the resident memory after each frame (MB), so that growth over a long run can be
+// set against the map size in the same row.
+std::string FramesCsv(const slam::SequenceRun& run, const std::vector<std::string>& stages,
+                      const std::vector<double>& rss_mb) {
+  std::string csv =
+      "frame,timestamp,state,method,keypoints,inliers,keyframe,keyframes,map_points,rss_mb";
   for (const auto& stage : stages) csv += "," + stage + "_ms";
   csv += "\n";
   char buffer[128];
   for (std::size_t i = 0; i < run.frames.size(); ++i) {
     const slam::FrameOutcome& f = run.frames[i];
-    std::snprintf(buffer, sizeof(buffer), "%zu,%.6f,%s,%s,%d,%d,%d", i, f.timestamp,
+    std::snprintf(buffer, sizeof(buffer), "%zu,%.6f,%s,%s,%d,%d,%d,%d,%d,%.1f", i, f.timestamp,
                   StateName(f.state), f.method.c_str(), f.keypoints, f.inliers,
-                  f.new_keyframe ? 1 : 0);
+                  f.new_keyframe ? 1 : 0, f.keyframes, f.map_points,
+                  i < rss_mb.size() ? rss_mb[i] : 0.0);
     csv += buffer;
     for (const auto& stage : stages) {
       const auto found = f.stage_ms.find(stage);
@@ -104,13 +110,17 @@ void RunSlam(const SlamArguments& args) {
   run_options.max_frames = args.max_frames;
   run_options.overlap_extraction = !args.sequential;
   const int every = std::max(1, args.progress_every);
-  run_options.progress = [every](int index, int count, const slam::FrameOutcome& outcome) {
+  // Resident memory after every frame (reading /proc/self/statm costs microseconds).
+  auto rss_mb = std::make_shared<std::vector<double>>();
+  run_options.progress = [every, rss_mb](int index, int count, const slam::FrameOutcome& outcome) {
+    rss_mb->push_back(ResidentMemoryMb().value_or(0.0));
     if ((index + 1) % every != 0 && index + 1 != count) return;
     const int width = 30;
     const int filled = (index + 1) * width / count;
-    std::fprintf(stderr, "slam: [%s%s] %d/%d  %s, %d inliers\n", std::string(filled, '#').c_str(),
-                 std::string(width - filled, '.').c_str(), index + 1, count,
-                 StateName(outcome.state), outcome.inliers);
+    std::fprintf(stderr, "slam: [%s%s] %d/%d  %s, %d inliers, %d keyframes, %d points, %.1f MB\n",
+                 std::string(filled, '#').c_str(), std::string(width - filled, '.').c_str(),
+                 index + 1, count, StateName(outcome.state), outcome.inliers, outcome.keyframes,
+                 outcome.map_points, rss_mb->back());
   };
   if (args.brightness < 1.0) {
     const double factor = args.brightness;
@@ -129,7 +139,7 @@ void RunSlam(const SlamArguments& args) {
   WriteTextFileAtomically(out / "trajectory.txt", io::FormatTumTrajectory(run.trajectory));
   const std::vector<std::string> stages = {"load",      "extract", "track",
                                            "local_map", "mapping", "total"};
-  WriteTextFileAtomically(out / "frames.csv", FramesCsv(run, stages));
+  WriteTextFileAtomically(out / "frames.csv", FramesCsv(run, stages, *rss_mb));
 
   nlohmann::json report;
   report["dataset"] = args.dataset;
@@ -148,6 +158,12 @@ void RunSlam(const SlamArguments& args) {
   report["overlap_extraction"] = !args.sequential;
   // The mean too: mapping runs on keyframes only, so its median is ~0 while its mean is what it
   // costs per frame.
+  // Memory: the peak over the whole process and the resident size at the end, next to the map
+  // size, so that a long run shows whether memory follows the map.
+  report["memory"] = {{"peak_rss_mb", PeakResidentMemoryMb()},
+                      {"final_rss_mb", rss_mb->empty() ? 0.0 : rss_mb->back()},
+                      {"keyframes", run.keyframes},
+                      {"map_points", run.map_points}};
   std::string markdown = "| stage | median ms | mean ms | max ms |\n|---|---|---|---|\n";
   for (const auto& stage : stages) {
     std::vector<double> samples;
@@ -168,10 +184,11 @@ void RunSlam(const SlamArguments& args) {
   }
   char counts[320];
   std::snprintf(counts, sizeof(counts),
-                "\nframes %zu, tracked %zu, lost %zu, keyframes %d, map points %d\n"
+                "\nframes %zu, tracked %zu, lost %zu, keyframes %d, map points %d, peak RSS "
+                "%.1f MB\n"
                 "%.1f frames/s (%.2f s for the run, loading included, %s)\n",
                 run.frames.size(), run.trajectory.size(), run.lost_frames.size(), run.keyframes,
-                run.map_points, run.FramesPerSecond(), run.wall_s,
+                run.map_points, PeakResidentMemoryMb(), run.FramesPerSecond(), run.wall_s,
                 args.sequential ? "sequential" : "extraction overlapped with tracking");
   markdown += counts;
   if (sequence.has_ground_truth() && run.trajectory.size() >= 3) {

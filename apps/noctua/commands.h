@@ -18,5 +18,6 @@ void AddRpeCommand(CLI::App& app);
 void AddSlamCommand(CLI::App& app);
 void AddSimulateCommand(CLI::App& app);
 void AddEvalCommand(CLI::App& app);
+void AddBenchCommand(CLI::App& app);
 
 }  // namespace noctua::app

@@ -25,6 +25,7 @@ int main(int argc, char** argv) {
   noctua::app::AddSlamCommand(app);
   noctua::app::AddSimulateCommand(app);
   noctua::app::AddEvalCommand(app);
+  noctua::app::AddBenchCommand(app);
 
   try {
     app.parse(argc, argv);

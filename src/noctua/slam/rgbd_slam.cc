@@ -114,6 +114,8 @@ SequenceRun RunSequence(const io::Sequence& sequence, double depth_factor,
     outcome.stage_ms["load"] = prepared.load_ms;
     outcome.stage_ms["total"] = total.ElapsedMs();
     outcome.keypoints = result.keypoints;
+    outcome.keyframes = slam.tracker().map().NumKeyFrames();
+    outcome.map_points = slam.tracker().map().NumMapPoints();
     if (result.state != TrackingState::kNotInitialised) started = true;
     if (started && result.state != TrackingState::kOk) run.lost_frames.push_back(i);
     run.frames.push_back(outcome);

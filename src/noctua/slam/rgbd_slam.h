@@ -59,6 +59,8 @@ struct FrameOutcome {
   int keypoints = 0;
   int inliers = 0;
   bool new_keyframe = false;
+  int keyframes = 0;   // map size after this frame
+  int map_points = 0;  // (so memory can be set against it over a long run)
   // load, extract, track, local_map, mapping, and total: the wall time of the frame's iteration
   // (with overlapped extraction, the time the SLAM waited for it plus its own work).
   std::map<std::string, double> stage_ms;
