@@ -163,7 +163,9 @@ void RunSlam(const SlamArguments& args) {
   report["memory"] = {{"peak_rss_mb", PeakResidentMemoryMb()},
                       {"final_rss_mb", rss_mb->empty() ? 0.0 : rss_mb->back()},
                       {"keyframes", run.keyframes},
-                      {"map_points", run.map_points}};
+                      {"map_points", run.map_points},
+                      {"keyframes_created", run.keyframes_created},
+                      {"map_points_created", run.map_points_created}};
   std::string markdown = "| stage | median ms | mean ms | max ms |\n|---|---|---|---|\n";
   for (const auto& stage : stages) {
     std::vector<double> samples;

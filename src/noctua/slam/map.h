@@ -148,6 +148,8 @@ class Map {
   int NumKeyFrames() const;
   int NumMapPoints() const;
   const std::vector<std::unique_ptr<KeyFrame>>& all_keyframes() const { return keyframes_; }
+  // Every point ever made, culled ones included (they stay allocated, see MapPoint).
+  int NumMapPointsCreated() const { return static_cast<int>(points_.size()); }
 
  private:
   std::vector<std::unique_ptr<KeyFrame>> keyframes_;

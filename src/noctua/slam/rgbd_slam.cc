@@ -125,6 +125,8 @@ SequenceRun RunSequence(const io::Sequence& sequence, double depth_factor,
   run.trajectory = slam.Trajectory();
   run.keyframes = slam.tracker().map().NumKeyFrames();
   run.map_points = slam.tracker().map().NumMapPoints();
+  run.keyframes_created = static_cast<int>(slam.tracker().map().all_keyframes().size());
+  run.map_points_created = slam.tracker().map().NumMapPointsCreated();
   return run;
 }
 
