@@ -2,6 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
+
+#include "noctua/util/error.h"
 
 namespace noctua::slam {
 
@@ -199,6 +202,12 @@ void KeyFrame::SetBad() {
     map_points_[i] = nullptr;
     if (point != nullptr) point->EraseObservation(this);
   }
+  features_.reset();
+}
+
+void KeyFrame::ThrowReleasedFeatures() const {
+  throw Error("keyframe " + std::to_string(id_) +
+              " was culled and its features released; nothing may read them any more");
 }
 
 KeyFrame* Map::AddKeyFrame(const Frame& frame) {

@@ -10,6 +10,7 @@
 #include "noctua/eval/trajectory_error.h"
 #include "noctua/features/extractor_config.h"
 #include "noctua/pipeline/method.h"
+#include "noctua/slam/map.h"
 #include "noctua/testing/shared_data.h"
 #include "noctua/util/error.h"
 
@@ -72,6 +73,41 @@ TEST_F(RgbdSlamTest, TracksEveryFrameOfTheFirst100OfFr1) {
   for (std::size_t i = 0; i < first.trajectory.size(); ++i) {
     EXPECT_TRUE(again.trajectory.poses()[i].pose.isApprox(first.trajectory.poses()[i].pose, 1e-12));
   }
+}
+
+// A culled keyframe gives its features back (a long run otherwise grew by every keyframe ever
+// culled) but keeps its pose for the frames that refer to it; reading its features is refused
+// with an error rather than a crash. The other keyframe sharing nothing with it is untouched.
+TEST_F(RgbdSlamTest, CulledKeyFrameReleasesItsFeaturesAndKeepsItsPose) {
+  const io::FrameImages images = sequence_->Load(sequence_->frame(0), setup_->camera.depth_factor);
+  std::vector<cv::KeyPoint> keypoints;
+  cv::Mat descriptors;
+  Orb(*setup_)->detectAndCompute(images.bgr, cv::noArray(), keypoints, descriptors);
+  auto make_features = [&] {
+    return std::make_shared<const FrameFeatures>(keypoints, descriptors, images.depth_m,
+                                                 setup_->camera.Camera(), setup_->options.bf,
+                                                 setup_->options.min_depth_m);
+  };
+  Frame first_frame(0, 0.0, make_features());
+  Frame second_frame(1, 1.0, make_features());
+  second_frame.pose_cw.translation() << 0.1, 0.2, 0.3;
+  Map map;
+  KeyFrame* first = map.AddKeyFrame(first_frame);
+  KeyFrame* second = map.AddKeyFrame(second_frame);
+  const std::weak_ptr<const FrameFeatures> second_features = second_frame.features;
+  second_frame.features.reset();  // the keyframe now holds the only reference
+  ASSERT_FALSE(second_features.expired());
+  EXPECT_EQ(second->features().size(), static_cast<int>(keypoints.size()));
+  second->SetBad();
+  EXPECT_TRUE(second->bad());
+  EXPECT_TRUE(second_features.expired());
+  EXPECT_THROW(second->features(), Error);
+  EXPECT_TRUE(second->pose_cw().isApprox(second_frame.pose_cw));
+  EXPECT_EQ(map.NumKeyFrames(), 1);
+  EXPECT_EQ(first->features().size(), static_cast<int>(keypoints.size()));
+  // The first keyframe anchors the map and is never culled.
+  first->SetBad();
+  EXPECT_FALSE(first->bad());
 }
 
 // 20 black frames in the middle (a dark stretch): no crash, the dark frames are reported lost
