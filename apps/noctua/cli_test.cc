@@ -338,13 +338,13 @@ TEST_F(CliTest, BenchWritesATableJsonAndPlotWithEveryStageAndMethod) {
     stages.push_back(row["name"]);
     ExpectPositiveRow(row);
   }
-  EXPECT_THAT(stages, ::testing::IsSupersetOf(
-                          {"grey conversion", "CLAHE", "pyramid (8 levels)",
-                           "oFAST (grid FAST, all levels)", "orientation (intensity centroid)",
-                           "phase congruency edge map",
-                           "filter (b): on an edge (distance map + test)", "filter (c): 3x3 NMS",
-                           "rBRIEF descriptors", "matching (2-NN + ratio 0.8, consecutive frames)",
-                           "slam: track local map (incl. pose optimisation)"}));
+  EXPECT_THAT(stages,
+              ::testing::IsSupersetOf(
+                  {"grey conversion", "CLAHE", "pyramid (8 levels)",
+                   "oFAST (grid FAST, all levels)", "orientation (intensity centroid)",
+                   "phase congruency edge map", "filter (b): on an edge", "filter (c): 3x3 NMS",
+                   "rBRIEF descriptors", "matching (2-NN + ratio 0.8, consecutive frames)",
+                   "slam: track local map (incl. pose optimisation)"}));
   // The Markdown table has one row per JSON row, and the plot is a real PNG.
   std::ifstream markdown_in(out / "bench.md");
   const std::string markdown((std::istreambuf_iterator<char>(markdown_in)),

@@ -138,7 +138,7 @@ const std::vector<std::pair<std::string, std::string>>& ExtractorStages() {
       {"dynamic-mask", "detector (dynamic mask)"},
       {"edge-map", "phase congruency edge map"},
       {"dynamic-filter", "filter (a): dynamic regions"},
-      {"edge-filter", "filter (b): on an edge (distance map + test)"},
+      {"edge-filter", "filter (b): on an edge"},
       {"nms-filter", "filter (c): 3x3 NMS"},
       {"distribute", "distribution over the image"},
       {"orientation", "orientation (intensity centroid)"},
