@@ -128,14 +128,8 @@ PersonFrame MovingPerson::Composite(const cv::Mat& image, const cv::Mat& depth16
         image.cols * (options_.start_x + progress * (options_.end_x - options_.start_x));
     const double left = centre_x - cutout_colour_.cols * scale / 2.0;
     const double top = options_.cutout_bottom_y * image.rows - cutout_colour_.rows * scale;
-    const cv::Matx23d to_image(scale, 0.0, left, 0.0, scale, top);
-    cv::Mat body_mask;
-    cv::Mat body_colour;
-    cv::warpAffine(cutout_mask_, body_mask, to_image, image.size(), cv::INTER_NEAREST,
-                   cv::BORDER_CONSTANT, cv::Scalar(0));
-    cv::warpAffine(cutout_colour_, body_colour, to_image, image.size(), cv::INTER_LINEAR,
-                   cv::BORDER_REPLICATE);
-    return Paint(image, depth16, body_mask, body_colour);
+    return Paint(image, depth16, cutout_mask_, cutout_colour_,
+                 cv::Matx23d(scale, 0.0, left, 0.0, scale, top));
   }
 
   // Body geometry in metres (x right, y down from the top of the head), drawn into a sprite at
@@ -178,18 +172,20 @@ PersonFrame MovingPerson::Composite(const cv::Mat& image, const cv::Mat& depth16
   const double scale = px_per_m / kTextureScale;
   const double left = centre_x - sprite_cols * scale / 2.0;
   const double top = options_.feet_y * image.rows - sprite_rows * scale;
-  cv::Matx23d to_image(scale, 0.0, left, 0.0, scale, top);
+  return Paint(image, depth16, sprite_mask, texture_,
+               cv::Matx23d(scale, 0.0, left, 0.0, scale, top));
+}
+
+PersonFrame MovingPerson::Paint(const cv::Mat& image, const cv::Mat& depth16,
+                                const cv::Mat& sprite_mask, const cv::Mat& sprite_colour,
+                                const cv::Matx23d& to_image) const {
   cv::Mat body_mask;
   cv::Mat body_colour;
   cv::warpAffine(sprite_mask, body_mask, to_image, image.size(), cv::INTER_NEAREST,
                  cv::BORDER_CONSTANT, cv::Scalar(0));
-  cv::warpAffine(texture_, body_colour, to_image, image.size(), cv::INTER_LINEAR,
+  cv::warpAffine(sprite_colour, body_colour, to_image, image.size(), cv::INTER_LINEAR,
                  cv::BORDER_REPLICATE);
-  return Paint(image, depth16, body_mask, body_colour);
-}
 
-PersonFrame MovingPerson::Paint(const cv::Mat& image, const cv::Mat& depth16,
-                                const cv::Mat& body_mask, const cv::Mat& body_colour) const {
   // The person is visible where it is nearer than the scene or where the scene has no depth.
   const auto person_depth =
       static_cast<std::uint16_t>(std::lround(options_.distance_m * depth_factor_));

@@ -68,9 +68,10 @@ class MovingPerson {
   MovingPersonOptions options_;
   double focal_px_;
   double depth_factor_;
-  // Draws the person, given in image coordinates, where it is nearer than the scene.
-  PersonFrame Paint(const cv::Mat& image, const cv::Mat& depth16, const cv::Mat& body_mask,
-                    const cv::Mat& body_colour) const;
+  // Draws the sprite (mask CV_8U, colour BGR), mapped into the image by `to_image`, where the
+  // person is nearer than the scene.
+  PersonFrame Paint(const cv::Mat& image, const cv::Mat& depth16, const cv::Mat& sprite_mask,
+                    const cv::Mat& sprite_colour, const cv::Matx23d& to_image) const;
 
   bool is_cutout_ = false;
   cv::Mat cutout_colour_;
