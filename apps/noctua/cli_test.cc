@@ -400,4 +400,35 @@ TEST_F(CliTest, SlamReportsMemoryAndMapSize) {
   EXPECT_GT(std::stod(cells[9]), 10.0);
 }
 
+// With a detector, the SLAM detects on a thread of its own every N-th frame by default, says so in
+// its report, and refuses contradictory detection flags.
+TEST_F(CliTest, SlamDetectsAheadOnItsOwnThreadUnlessToldToDetectInline) {
+  const std::string base =
+      "slam --dataset " + (noctua::testing::DataDir() / "tum_fr1_rpy_200").string() + " --config " +
+      std::string(NOCTUA_SOURCE_DIR) +
+      "/config/tum_fr1.yaml --method paper --max-frames 8 --detector " +
+      (noctua::testing::ModelsDir() / "yolov8n" / "yolov8n_head_f32.onnx").string();
+  for (const std::string mode : {"--detect-every 2", "--detect-inline"}) {
+    SCOPED_TRACE(mode);
+    const auto out = dir_ / ("slam" + std::to_string(mode.size()));
+    const CommandResult result = RunNoctua(base + " " + mode + " --out " + out.string());
+    ASSERT_EQ(result.exit_code, 0) << result.output;
+    std::ifstream in(out / "report.json");
+    const auto report = nlohmann::json::parse(in);
+    EXPECT_EQ(report["tracked_frames"], 8);
+    const bool ahead = mode != "--detect-inline";
+    EXPECT_EQ(report["detection"]["every_n_frames"], ahead ? 2 : 1);
+    EXPECT_THAT(report["detection"]["mode"].get<std::string>(),
+                HasSubstr(ahead ? "own thread" : "inline"));
+  }
+  const CommandResult both =
+      RunNoctua(base + " --detect-inline --detect-every 2 --out " + (dir_ / "both").string());
+  EXPECT_NE(both.exit_code, 0);
+  EXPECT_THAT(both.output, HasSubstr("excludes"));
+  const CommandResult zero =
+      RunNoctua(base + " --detect-every 0 --out " + (dir_ / "zero").string());
+  EXPECT_EQ(zero.exit_code, 1);
+  EXPECT_THAT(zero.output, HasSubstr("--detect-every must be at least 1"));
+}
+
 }  // namespace

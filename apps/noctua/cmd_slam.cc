@@ -52,6 +52,10 @@ struct SlamArguments {
   double brightness = 1.0;
   int progress_every = 20;
   bool sequential = false;
+  // The detector: by default on a thread of its own, on every N-th frame, frames handed to it
+  // ahead of their extraction; --detect-inline runs it in the extraction on every frame.
+  int detect_every = dynamic::AsyncMaskOptions().every_n;
+  bool detect_inline = false;
   MethodFlags method;
 };
 
@@ -97,9 +101,12 @@ std::string FramesCsv(const slam::SequenceRun& run, const std::vector<std::strin
 void RunSlam(const SlamArguments& args) {
   CheckOption(args.brightness > 0.0 && args.brightness <= 1.0, "--brightness must be in (0, 1]");
   CheckOption(args.max_frames >= 0, "--max-frames must not be negative");
+  CheckOption(args.detect_every >= 1, "--detect-every must be at least 1");
   if (args.method.config.empty()) throw Error("slam needs --config (a camera preset, see config/)");
   const slam::SlamSetup setup = slam::LoadSlamSetup(args.method.config);
-  const pipeline::MethodConfig method_config = MethodConfigFromFlags(args.method);
+  pipeline::MethodConfig method_config = MethodConfigFromFlags(args.method);
+  method_config.detect_ahead = !args.detect_inline;
+  method_config.detect_ahead_options.every_n = args.detect_every;
   const std::unique_ptr<pipeline::FeatureMethod> method =
       pipeline::CreateMethod(args.method.method, method_config);
   const io::Sequence sequence = io::Sequence::Open(args.dataset);
@@ -109,6 +116,9 @@ void RunSlam(const SlamArguments& args) {
   slam::RunOptions run_options;
   run_options.max_frames = args.max_frames;
   run_options.overlap_extraction = !args.sequential;
+  if (const auto masks = method->detection_ahead()) {
+    run_options.lookahead = [masks](const cv::Mat& image) { masks->Submit(image); };
+  }
   const int every = std::max(1, args.progress_every);
   // Resident memory after every frame (reading /proc/self/statm costs microseconds).
   auto rss_mb = std::make_shared<std::vector<double>>();
@@ -156,6 +166,12 @@ void RunSlam(const SlamArguments& args) {
   report["wall_s"] = run.wall_s;
   report["frames_per_second"] = run.FramesPerSecond();
   report["overlap_extraction"] = !args.sequential;
+  if (!method_config.detector_model.empty()) {
+    report["detection"] = {
+        {"model", method_config.detector_model},
+        {"mode", method->detection_ahead() ? "own thread, frames submitted ahead" : "inline"},
+        {"every_n_frames", method->detection_ahead() ? args.detect_every : 1}};
+  }
   // The mean too: mapping runs on keyframes only, so its median is ~0 while its mean is what it
   // costs per frame.
   // Memory: the peak over the whole process and the resident size at the end, next to the map
@@ -242,6 +258,15 @@ void AddSlamCommand(CLI::App& app) {
   command->add_flag("--sequential", args->sequential,
                     "Extract each frame only after the previous one is tracked (one thread; by "
                     "default the next frame is extracted while this one is tracked)");
+  CLI::Option* detect_every = command->add_option(
+      "--detect-every", args->detect_every,
+      "With --detector: detect on every N-th frame, on a thread of its own; the "
+      "frames between reuse the last mask");
+  detect_every->capture_default_str();
+  command
+      ->add_flag("--detect-inline", args->detect_inline,
+                 "With --detector: detect every frame inside the extraction (slower, exact masks)")
+      ->excludes(detect_every);
   command->callback([args] { RunSlam(*args); });
 }
 

@@ -52,10 +52,29 @@ class ExtractorMethod : public FeatureMethod {
   }
   int norm_type() const override { return cv::NORM_HAMMING; }
   cv::Ptr<cv::Feature2D> feature2d() const override { return extractor_; }
+  std::shared_ptr<dynamic::AsyncMaskPipeline> detection_ahead() const override {
+    return detection_ahead_;
+  }
   features::Extractor& extractor() { return *extractor_; }
+
+  // The extractor's dynamic mask comes from `masks`, one per extracted frame, in order.
+  void DetectAhead(std::shared_ptr<dynamic::AsyncMaskPipeline> masks) {
+    detection_ahead_ = masks;
+    extractor_->SetDynamicMaskSource([masks](const cv::Mat& image) {
+      cv::Mat mask = masks->Next();
+      if (mask.size() != image.size()) {
+        throw Error("dynamic mask detected ahead does not belong to this frame (" +
+                    std::to_string(mask.cols) + "x" + std::to_string(mask.rows) + " for " +
+                    std::to_string(image.cols) + "x" + std::to_string(image.rows) +
+                    "): frames must be submitted ahead in the order they are extracted");
+      }
+      return mask;
+    });
+  }
 
  private:
   cv::Ptr<features::Extractor> extractor_;
+  std::shared_ptr<dynamic::AsyncMaskPipeline> detection_ahead_;
 };
 
 // Any OpenCV Feature2D (OpenCV's ORB, SIFT, ...), timed as one stage.
@@ -179,7 +198,11 @@ std::unique_ptr<FeatureMethod> CreateMethod(const std::string& name, const Metho
     auto method = std::make_unique<ExtractorMethod>(name, OptionsForMethod(name, config.extractor));
     method->extractor().SetEdgeMapSource(
         edges::MakeEdgeMapSource(edges::CreateEdgeDetector(edges::EdgeDetectorOptions())));
-    if (!config.detector_model.empty()) {
+    if (!config.detector_model.empty() && config.detect_ahead) {
+      method->DetectAhead(std::make_shared<dynamic::AsyncMaskPipeline>(
+          dynamic::LoadDetector(config.detector_model, config.detector), config.motion_levels,
+          config.dynamic_mask, config.detect_ahead_options));
+    } else if (!config.detector_model.empty()) {
       method->extractor().SetDynamicMaskSource(dynamic::MakeDynamicMaskSource(
           dynamic::LoadDetector(config.detector_model, config.detector), config.motion_levels,
           config.dynamic_mask));

@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "noctua/dynamic/async_masks.h"
 #include "noctua/dynamic/detector.h"
 #include "noctua/dynamic/dynamic_mask.h"
 #include "noctua/dynamic/motion_levels.h"
@@ -21,11 +22,17 @@ struct MethodConfig {
   dynamic::DetectorOptions detector;     // its input size and thresholds
   dynamic::MotionLevelTable motion_levels;   // COCO class -> motion level (paper Table 1)
   dynamic::DynamicMaskOptions dynamic_mask;  // which levels are dynamic, box/instance, dilation
+  // Detection on a thread of its own, every `detect_ahead.every_n`-th frame, instead of in line
+  // on every frame. The caller then submits each frame ahead of its extraction through
+  // FeatureMethod::detection_ahead() (slam::RunOptions::lookahead does it for a sequence).
+  bool detect_ahead = false;
+  dynamic::AsyncMaskOptions detect_ahead_options;
 
   void Check() const {
     extractor.Check();
     detector.Check();
     dynamic_mask.Check();
+    detect_ahead_options.Check();
   }
 };
 
@@ -48,6 +55,11 @@ class FeatureMethod {
 
   // The method as a plain cv::Feature2D, for code that wants OpenCV's interface.
   virtual cv::Ptr<cv::Feature2D> feature2d() const = 0;
+
+  // Non-null when the method detects dynamic regions ahead, on a thread of its own
+  // (MethodConfig::detect_ahead): every image the method runs on must then have been submitted
+  // here first, in the same order; running on an image that was not fails with noctua::Error.
+  virtual std::shared_ptr<dynamic::AsyncMaskPipeline> detection_ahead() const { return nullptr; }
 
  protected:
   explicit FeatureMethod(std::string name) : name_(std::move(name)) {}

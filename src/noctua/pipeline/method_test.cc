@@ -163,6 +163,53 @@ TEST(CreateMethod, PaperWithADetectorLeavesNoPointOnThePeopleOfFr3Walking) {
   }
 }
 
+// Detection ahead on its own thread gives, with every frame detected, exactly the points of
+// detection in line; with every 3rd frame detected, the frames between carry the last mask.
+TEST(CreateMethod, PaperDetectingAheadMatchesInlineDetectionAndNeedsSubmittedFrames) {
+  std::vector<std::filesystem::path> paths;
+  for (const auto& entry : std::filesystem::directory_iterator(
+           noctua::testing::DataDir() / "tum_fr3_walking_rpy_rgb16" / "rgb")) {
+    paths.push_back(entry.path());
+  }
+  std::sort(paths.begin(), paths.end());
+  ASSERT_GE(paths.size(), 4u);
+  std::vector<cv::Mat> frames;
+  for (std::size_t i = 0; i < 4; ++i) {
+    frames.push_back(noctua::testing::ReadImageOrThrow(paths[i], cv::IMREAD_COLOR));
+  }
+  MethodConfig config;
+  config.detector_model = YoloV8n().string();
+  auto inline_paper = CreateMethod("paper", config);
+  EXPECT_EQ(inline_paper->detection_ahead(), nullptr);
+  config.detect_ahead = true;
+  config.detect_ahead_options.every_n = 1;
+  auto ahead_paper = CreateMethod("paper", config);
+  const auto masks = ahead_paper->detection_ahead();
+  ASSERT_NE(masks, nullptr);
+  for (const cv::Mat& frame : frames) masks->Submit(frame);
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    SCOPED_TRACE(i);
+    const auto expected = inline_paper->Run(frames[i]);
+    const auto actual = ahead_paper->Run(frames[i]);
+    EXPECT_LT(actual.stats.after_dynamic, actual.stats.after_mask);
+    ASSERT_EQ(actual.keypoints.size(), expected.keypoints.size());
+    EXPECT_EQ(cv::norm(actual.descriptors, expected.descriptors, cv::NORM_HAMMING), 0.0);
+  }
+  // Nothing submitted for this frame: a clear error, not a hang or a frame without its mask.
+  EXPECT_THAT([&] { ahead_paper->Run(frames[0]); },
+              ::testing::ThrowsMessage<Error>(HasSubstr("without a submitted frame")));
+
+  // Every 3rd frame: frame 1 carries frame 0's mask (the people have moved a little).
+  config.detect_ahead_options.every_n = 3;
+  auto sparse_paper = CreateMethod("paper", config);
+  for (const cv::Mat& frame : frames) sparse_paper->detection_ahead()->Submit(frame);
+  const auto first = sparse_paper->Run(frames[0]);
+  EXPECT_EQ(cv::norm(first.descriptors, inline_paper->Run(frames[0]).descriptors, cv::NORM_HAMMING),
+            0.0);
+  const auto carried = sparse_paper->Run(frames[1]);
+  EXPECT_LT(carried.stats.after_dynamic, carried.stats.after_mask);
+}
+
 TEST(CreateMethod, PaperWithABadDetectorPathNamesTheFile) {
   MethodConfig config;
   config.detector_model = "/nonexistent/detector.onnx";

@@ -1,5 +1,6 @@
 #include "noctua/slam/rgbd_slam.h"
 
+#include <deque>
 #include <future>
 
 #include "noctua/util/error.h"
@@ -66,18 +67,43 @@ SequenceRun RunSequence(const io::Sequence& sequence, double depth_factor,
   const int count = run_options.max_frames > 0
                         ? std::min(run_options.max_frames, static_cast<int>(sequence.size()))
                         : static_cast<int>(sequence.size());
+  if (run_options.lookahead && run_options.lookahead_frames < 1) {
+    throw Error("slam: lookahead_frames must be at least 1");
+  }
+  struct Loaded {
+    io::FrameImages images;
+    double timestamp = 0.0;
+    double load_ms = 0.0;
+  };
+  const auto load = [&](int i) {
+    Stopwatch watch;
+    const io::Frame& frame = sequence.frame(static_cast<std::size_t>(i));
+    Loaded loaded{sequence.Load(frame, depth_factor), frame.timestamp, 0.0};
+    if (run_options.transform_image) {
+      loaded.images.bgr = run_options.transform_image(i, loaded.images.bgr);
+    }
+    loaded.load_ms = watch.ElapsedMs();
+    return loaded;
+  };
+  // Frames loaded (and handed to the lookahead) before their extraction. Only one prepare() runs
+  // at a time, each after the previous one has been waited for, so the queue needs no lock.
+  std::deque<Loaded> ahead;
+  int next_to_load = 0;
+  const int load_ahead = run_options.lookahead ? run_options.lookahead_frames : 0;
   struct Prepared {
     RgbdSlam::Extracted extracted;
     double load_ms = 0.0;
   };
   const auto prepare = [&](int i) {
-    Stopwatch watch;
-    const io::Frame& frame = sequence.frame(static_cast<std::size_t>(i));
-    io::FrameImages images = sequence.Load(frame, depth_factor);
-    if (run_options.transform_image) images.bgr = run_options.transform_image(i, images.bgr);
+    while (next_to_load < count && next_to_load <= i + load_ahead) {
+      ahead.push_back(load(next_to_load++));
+      if (run_options.lookahead) run_options.lookahead(ahead.back().images.bgr);
+    }
+    Loaded loaded = std::move(ahead.front());
+    ahead.pop_front();
     Prepared prepared;
-    prepared.load_ms = watch.ElapsedMs();
-    prepared.extracted = slam.Extract(images.bgr, images.depth_m, frame.timestamp);
+    prepared.load_ms = loaded.load_ms;
+    prepared.extracted = slam.Extract(loaded.images.bgr, loaded.images.depth_m, loaded.timestamp);
     return prepared;
   };
   SequenceRun run;

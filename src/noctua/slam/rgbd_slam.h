@@ -94,6 +94,12 @@ struct RunOptions {
   // extraction of a frame does not depend on tracking). Off: one thread, stage by stage.
   // transform_image is then called on that thread.
   bool overlap_extraction = true;
+  // Called with each frame's colour image (after transform_image), in frame order, up to
+  // `lookahead_frames` frames before that frame is extracted: e.g. to detect dynamic regions on
+  // a thread of their own (pipeline::FeatureMethod::detection_ahead) early enough that the
+  // extraction finds the mask ready. Frames are loaded that much ahead.
+  std::function<void(const cv::Mat&)> lookahead;
+  int lookahead_frames = 3;
 };
 
 // Runs the SLAM over a sequence with the given depth factor (DepthMapFactor).

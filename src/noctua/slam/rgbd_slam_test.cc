@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <fstream>
+#include <mutex>
 #include <opencv2/features2d.hpp>
 
 #include "noctua/eval/trajectory_error.h"
@@ -113,6 +114,87 @@ TEST_F(RgbdSlamTest, CulledKeyFrameReleasesItsFeaturesAndKeepsItsPose) {
 // 20 black frames in the middle (a dark stretch): no crash, the dark frames are reported lost
 // and left out of the trajectory, and relocalisation resumes tracking afterwards with a sound
 // pose.
+// Records the order in which frames are extracted, so that the lookahead's order can be checked
+// against it (the frames are told apart by their first pixels).
+class RecordingFeature2D : public cv::Feature2D {
+ public:
+  RecordingFeature2D(cv::Ptr<cv::Feature2D> inner, std::vector<std::string>* events)
+      : inner_(std::move(inner)), events_(events) {}
+  void detectAndCompute(cv::InputArray image, cv::InputArray mask,
+                        std::vector<cv::KeyPoint>& keypoints, cv::OutputArray descriptors,
+                        bool use_provided_keypoints) override {
+    events_->push_back("extract " + Signature(image.getMat()));
+    inner_->detectAndCompute(image, mask, keypoints, descriptors, use_provided_keypoints);
+  }
+  static std::string Signature(const cv::Mat& image) {
+    return std::to_string(cv::sum(image.row(0))[0]);
+  }
+
+ private:
+  cv::Ptr<cv::Feature2D> inner_;
+  std::vector<std::string>* events_;
+};
+
+// Every frame reaches the lookahead once, in order, after transform_image and `lookahead_frames`
+// frames before its extraction, with and without extraction overlapped with tracking; the
+// trajectory is the one of a run without a lookahead.
+TEST_F(RgbdSlamTest, LookaheadSeesEveryFrameInOrderAheadOfItsExtraction) {
+  const int frames = 12;
+  RunOptions plain;
+  plain.max_frames = frames;
+  const SequenceRun reference =
+      RunSequence(*sequence_, setup_->camera.depth_factor, setup_->camera.Camera(), Orb(*setup_),
+                  setup_->options, plain);
+  for (const bool overlap : {false, true}) {
+    SCOPED_TRACE(overlap ? "overlapped" : "sequential");
+    std::vector<std::string> events;
+    std::mutex events_mutex;  // extraction and lookahead may run on the worker thread
+    RunOptions options;
+    options.max_frames = frames;
+    options.overlap_extraction = overlap;
+    options.lookahead_frames = 2;
+    options.lookahead = [&](const cv::Mat& image) {
+      std::lock_guard lock(events_mutex);
+      events.push_back("ahead " + RecordingFeature2D::Signature(image));
+    };
+    const SequenceRun run = RunSequence(
+        *sequence_, setup_->camera.depth_factor, setup_->camera.Camera(),
+        cv::makePtr<RecordingFeature2D>(Orb(*setup_), &events), setup_->options, options);
+    std::vector<std::string> ahead;
+    std::vector<std::string> extracted;
+    for (const std::string& event : events) {
+      (event.rfind("ahead", 0) == 0 ? ahead : extracted).push_back(event.substr(event.find(' ')));
+    }
+    EXPECT_EQ(ahead, extracted);
+    ASSERT_EQ(ahead.size(), static_cast<std::size_t>(frames));
+    // Frame i is extracted after frames up to i + 2 went to the lookahead (fewer near the end).
+    int seen_ahead = 0;
+    int seen_extracted = 0;
+    for (const std::string& event : events) {
+      if (event.rfind("ahead", 0) == 0) {
+        ++seen_ahead;
+      } else {
+        EXPECT_EQ(seen_ahead, std::min(frames, seen_extracted + 3)) << event;
+        ++seen_extracted;
+      }
+    }
+    ASSERT_EQ(run.trajectory.size(), reference.trajectory.size());
+    for (std::size_t i = 0; i < run.trajectory.size(); ++i) {
+      EXPECT_TRUE(run.trajectory.poses()[i].pose.matrix().isApprox(
+          reference.trajectory.poses()[i].pose.matrix(), 1e-12));
+    }
+  }
+  RunOptions bad;
+  bad.lookahead = [](const cv::Mat&) {};
+  bad.lookahead_frames = 0;
+  EXPECT_THAT(
+      [&] {
+        RunSequence(*sequence_, setup_->camera.depth_factor, setup_->camera.Camera(), Orb(*setup_),
+                    setup_->options, bad);
+      },
+      ::testing::ThrowsMessage<Error>(HasSubstr("lookahead_frames")));
+}
+
 TEST_F(RgbdSlamTest, RecoversAfterTwentyBlackFrames) {
   const SequenceRun run = Run(90, [](int index, const cv::Mat& image) {
     return index >= 40 && index < 60 ? cv::Mat(image.size(), image.type(), cv::Scalar::all(0))
