@@ -1,7 +1,11 @@
 #include "noctua/slam/rgbd_slam.h"
 
+#include <condition_variable>
 #include <deque>
-#include <future>
+#include <exception>
+#include <mutex>
+#include <optional>
+#include <thread>
 
 #include "noctua/util/error.h"
 #include "noctua/util/timer.h"
@@ -60,6 +64,81 @@ io::Trajectory RgbdSlam::Trajectory() const {
   return io::Trajectory(std::move(poses));
 }
 
+namespace {
+
+struct PreparedFrame {
+  RgbdSlam::Extracted extracted;
+  double load_ms = 0.0;
+};
+
+// Frames 0..count-1 loaded and extracted in order on a thread of its own, up to `capacity` ahead
+// of the one the tracking takes, so that a slow frame on either side (a keyframe's local BA, a
+// frame whose mask is late) is absorbed instead of stalling the other side.
+class ExtractionQueue {
+ public:
+  ExtractionQueue(int count, int capacity, std::function<PreparedFrame(int)> prepare)
+      : capacity_(capacity), prepare_(std::move(prepare)) {
+    worker_ = std::thread([this, count] { Work(count); });
+  }
+  ~ExtractionQueue() {
+    {
+      std::lock_guard lock(mutex_);
+      stop_ = true;
+    }
+    changed_.notify_all();
+    worker_.join();
+  }
+  ExtractionQueue(const ExtractionQueue&) = delete;
+  ExtractionQueue& operator=(const ExtractionQueue&) = delete;
+
+  // The next frame in order; rethrows what loading or extracting it threw.
+  PreparedFrame Pop() {
+    std::unique_lock lock(mutex_);
+    changed_.wait(lock, [this] { return !ready_.empty() || error_; });
+    if (ready_.empty()) std::rethrow_exception(error_);
+    PreparedFrame frame = std::move(ready_.front());
+    ready_.pop_front();
+    lock.unlock();
+    changed_.notify_all();
+    return frame;
+  }
+
+ private:
+  void Work(int count) {
+    for (int i = 0; i < count; ++i) {
+      {
+        std::unique_lock lock(mutex_);
+        changed_.wait(lock,
+                      [this] { return stop_ || static_cast<int>(ready_.size()) < capacity_; });
+        if (stop_) return;
+      }
+      bool failed = false;
+      try {
+        PreparedFrame frame = prepare_(i);
+        std::lock_guard lock(mutex_);
+        ready_.push_back(std::move(frame));
+      } catch (...) {
+        std::lock_guard lock(mutex_);
+        error_ = std::current_exception();
+        failed = true;
+      }
+      changed_.notify_all();
+      if (failed) return;
+    }
+  }
+
+  const int capacity_;
+  std::function<PreparedFrame(int)> prepare_;
+  std::mutex mutex_;
+  std::condition_variable changed_;
+  std::deque<PreparedFrame> ready_;
+  std::exception_ptr error_;
+  bool stop_ = false;
+  std::thread worker_;  // last: starts after everything it uses exists
+};
+
+}  // namespace
+
 SequenceRun RunSequence(const io::Sequence& sequence, double depth_factor,
                         const geometry::PinholeCamera& camera, cv::Ptr<cv::Feature2D> extractor,
                         const SlamOptions& options, const RunOptions& run_options) {
@@ -67,6 +146,9 @@ SequenceRun RunSequence(const io::Sequence& sequence, double depth_factor,
   const int count = run_options.max_frames > 0
                         ? std::min(run_options.max_frames, static_cast<int>(sequence.size()))
                         : static_cast<int>(sequence.size());
+  if (run_options.overlap_extraction && run_options.extraction_queue < 1) {
+    throw Error("slam: extraction_queue must be at least 1");
+  }
   if (run_options.lookahead && run_options.lookahead_frames < 1) {
     throw Error("slam: lookahead_frames must be at least 1");
   }
@@ -85,15 +167,11 @@ SequenceRun RunSequence(const io::Sequence& sequence, double depth_factor,
     loaded.load_ms = watch.ElapsedMs();
     return loaded;
   };
-  // Frames loaded (and handed to the lookahead) before their extraction. Only one prepare() runs
-  // at a time, each after the previous one has been waited for, so the queue needs no lock.
+  // Frames loaded (and handed to the lookahead) before their extraction. Only one thread calls
+  // prepare(), so the queue needs no lock.
   std::deque<Loaded> ahead;
   int next_to_load = 0;
   const int load_ahead = run_options.lookahead ? run_options.lookahead_frames : 0;
-  struct Prepared {
-    RgbdSlam::Extracted extracted;
-    double load_ms = 0.0;
-  };
   const auto prepare = [&](int i) {
     while (next_to_load < count && next_to_load <= i + load_ahead) {
       ahead.push_back(load(next_to_load++));
@@ -101,7 +179,7 @@ SequenceRun RunSequence(const io::Sequence& sequence, double depth_factor,
     }
     Loaded loaded = std::move(ahead.front());
     ahead.pop_front();
-    Prepared prepared;
+    PreparedFrame prepared;
     prepared.load_ms = loaded.load_ms;
     prepared.extracted = slam.Extract(loaded.images.bgr, loaded.images.depth_m, loaded.timestamp);
     return prepared;
@@ -109,25 +187,16 @@ SequenceRun RunSequence(const io::Sequence& sequence, double depth_factor,
   SequenceRun run;
   bool started = false;
   const Stopwatch run_watch;
-  std::future<Prepared> next;
-  // A pending extraction is waited for on every exit, an exception included, before `slam`
-  // (which it uses) goes away.
-  struct WaitOnExit {
-    std::future<Prepared>& future;
-    ~WaitOnExit() {
-      if (future.valid()) future.wait();
-    }
-  } wait_on_exit{next};
+  // Declared after everything prepare() uses, so that its thread has stopped before they go.
+  std::optional<ExtractionQueue> queue;
+  if (run_options.overlap_extraction) queue.emplace(count, run_options.extraction_queue, prepare);
   for (int i = 0; i < count; ++i) {
     if (run_options.stop && run_options.stop()) {
       run.interrupted = true;
       break;
     }
     Stopwatch total;
-    Prepared prepared = next.valid() ? next.get() : prepare(i);
-    if (run_options.overlap_extraction && i + 1 < count) {
-      next = std::async(std::launch::async, prepare, i + 1);
-    }
+    PreparedFrame prepared = queue ? queue->Pop() : prepare(i);
     const double timestamp = prepared.extracted.timestamp;
     const TrackResult result = slam.Track(std::move(prepared.extracted));
     FrameOutcome outcome;

@@ -90,10 +90,13 @@ struct RunOptions {
   // Checked before every frame; when it returns true the run ends there and returns what was
   // tracked so far (e.g. on Ctrl-C, so the trajectory up to that point is not lost).
   std::function<bool()> stop;
-  // Load and extract frame i + 1 on a second thread while frame i is tracked (same results: the
-  // extraction of a frame does not depend on tracking). Off: one thread, stage by stage.
+  // Load and extract the next frames on a second thread while frame i is tracked (same results:
+  // the extraction of a frame does not depend on tracking). Off: one thread, stage by stage.
   // transform_image is then called on that thread.
   bool overlap_extraction = true;
+  // Frames extracted ahead at most (overlap_extraction): a queue deeper than one absorbs the
+  // tracking's slow frames (a keyframe's local BA) and the extraction's (a late mask).
+  int extraction_queue = 4;
   // Called with each frame's colour image (after transform_image), in frame order, up to
   // `lookahead_frames` frames before that frame is extracted: e.g. to detect dynamic regions on
   // a thread of their own (pipeline::FeatureMethod::detection_ahead) early enough that the
