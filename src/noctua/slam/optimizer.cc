@@ -7,68 +7,15 @@
 #include <map>
 #include <set>
 
+#include "noctua/slam/reprojection_cost.h"
+
 namespace noctua::slam {
 namespace {
-
-// Camera parameters the residuals need; copied into each functor.
-struct Intrinsics {
-  double fx, fy, cx, cy, bf;
-};
 
 Intrinsics IntrinsicsOf(const FrameFeatures& features, double bf) {
   const auto& camera = features.camera();
   return {camera.fx(), camera.fy(), camera.cx(), camera.cy(), bf};
 }
-
-// The observation of a point: undistorted pixel, and the virtual right coordinate when the
-// keypoint has depth (a negative right coordinate: monocular residual).
-struct Observation {
-  double u, v, right_u, inverse_sigma;
-  bool stereo;  // the keypoint has depth: three residuals
-};
-
-template <typename T>
-void Residuals(const Intrinsics& k, const Observation& o, const Eigen::Matrix<T, 3, 1>& p, T* r,
-               bool stereo) {
-  const T inverse_z = T(1.0) / p.z();
-  const T u = T(k.fx) * p.x() * inverse_z + T(k.cx);
-  const T v = T(k.fy) * p.y() * inverse_z + T(k.cy);
-  r[0] = (u - T(o.u)) * T(o.inverse_sigma);
-  r[1] = (v - T(o.v)) * T(o.inverse_sigma);
-  if (stereo) r[2] = (u - T(k.bf) * inverse_z - T(o.right_u)) * T(o.inverse_sigma);
-}
-
-// Reprojection error with the point fixed (motion-only optimisation).
-template <int kResiduals>
-struct PoseOnlyCost {
-  Intrinsics k;
-  Observation o;
-  Eigen::Vector3d point;
-  template <typename T>
-  bool operator()(const T* rotation, const T* translation, T* residuals) const {
-    const Eigen::Map<const Eigen::Quaternion<T>> q(rotation);
-    const Eigen::Map<const Eigen::Matrix<T, 3, 1>> t(translation);
-    const Eigen::Matrix<T, 3, 1> p = q * point.cast<T>() + t;
-    Residuals(k, o, p, residuals, kResiduals == 3);
-    return true;
-  }
-};
-
-// Reprojection error with pose and point free (bundle adjustment).
-template <int kResiduals>
-struct FullCost {
-  Intrinsics k;
-  Observation o;
-  template <typename T>
-  bool operator()(const T* rotation, const T* translation, const T* point, T* residuals) const {
-    const Eigen::Map<const Eigen::Quaternion<T>> q(rotation);
-    const Eigen::Map<const Eigen::Matrix<T, 3, 1>> t(translation);
-    const Eigen::Map<const Eigen::Matrix<T, 3, 1>> x(point);
-    const Eigen::Matrix<T, 3, 1> p = q * x + t;
-    Residuals(k, o, p, residuals, kResiduals == 3);
-    return true;
-  }
-};
 
 Observation ObservationOf(const FrameFeatures& features, int i, const ScalePyramid& pyramid) {
   const Eigen::Vector2d& pixel = features.undistorted(i);
@@ -140,7 +87,7 @@ int OptimizePose(Frame& frame, const ScalePyramid& pyramid, double bf) {
     ceres::Problem::Options problem_options;
     problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
     ceres::Problem problem(problem_options);
-    problem.AddParameterBlock(block.rotation.data(), 4, new ceres::EigenQuaternionManifold);
+    problem.AddParameterBlock(block.rotation.data(), 4, new LeftQuaternionManifold);
     problem.AddParameterBlock(block.translation.data(), 3);
     const bool robust = round < kRounds - 1;
     int residual_blocks = 0;
@@ -149,15 +96,11 @@ int OptimizePose(Frame& frame, const ScalePyramid& pyramid, double bf) {
       const Observation o = ObservationOf(features, i, pyramid);
       const Eigen::Vector3d point = frame.map_points[static_cast<std::size_t>(i)]->position();
       if (o.stereo) {
-        problem.AddResidualBlock(new ceres::AutoDiffCostFunction<PoseOnlyCost<3>, 3, 4, 3>(
-                                     new PoseOnlyCost<3>{k, o, point}),
-                                 robust ? &huber_stereo : nullptr, block.rotation.data(),
-                                 block.translation.data());
+        problem.AddResidualBlock(new PoseOnlyCost<3>(k, o, point), robust ? &huber_stereo : nullptr,
+                                 block.rotation.data(), block.translation.data());
       } else {
-        problem.AddResidualBlock(new ceres::AutoDiffCostFunction<PoseOnlyCost<2>, 2, 4, 3>(
-                                     new PoseOnlyCost<2>{k, o, point}),
-                                 robust ? &huber_mono : nullptr, block.rotation.data(),
-                                 block.translation.data());
+        problem.AddResidualBlock(new PoseOnlyCost<2>(k, o, point), robust ? &huber_mono : nullptr,
+                                 block.rotation.data(), block.translation.data());
       }
       ++residual_blocks;
     }
@@ -220,7 +163,7 @@ void LocalBundleAdjustment(KeyFrame* keyframe, const ScalePyramid& pyramid, doub
   ceres::HuberLoss huber_mono(std::sqrt(kChi2Mono));
   ceres::HuberLoss huber_stereo(std::sqrt(kChi2Stereo));
   for (auto& [k, block] : poses) {
-    problem.AddParameterBlock(block.rotation.data(), 4, new ceres::EigenQuaternionManifold);
+    problem.AddParameterBlock(block.rotation.data(), 4, new LeftQuaternionManifold);
     problem.AddParameterBlock(block.translation.data(), 3);
     if (fixed_set.count(k) > 0 || k->id() == 0) {
       problem.SetParameterBlockConstant(block.rotation.data());
@@ -240,13 +183,11 @@ void LocalBundleAdjustment(KeyFrame* keyframe, const ScalePyramid& pyramid, doub
       const Observation o = ObservationOf(observer->features(), index, pyramid);
       PoseBlock& block = poses.at(observer);
       if (o.stereo) {
-        problem.AddResidualBlock(
-            new ceres::AutoDiffCostFunction<FullCost<3>, 3, 4, 3, 3>(new FullCost<3>{k, o}),
-            &huber_stereo, block.rotation.data(), block.translation.data(), positions[p].data());
+        problem.AddResidualBlock(new FullCost<3>(k, o), &huber_stereo, block.rotation.data(),
+                                 block.translation.data(), positions[p].data());
       } else {
-        problem.AddResidualBlock(
-            new ceres::AutoDiffCostFunction<FullCost<2>, 2, 4, 3, 3>(new FullCost<2>{k, o}),
-            &huber_mono, block.rotation.data(), block.translation.data(), positions[p].data());
+        problem.AddResidualBlock(new FullCost<2>(k, o), &huber_mono, block.rotation.data(),
+                                 block.translation.data(), positions[p].data());
       }
       edges.push_back({observer, p, o});
     }
