@@ -16,6 +16,8 @@ void SlamOptions::Check() const {
   CheckOption(min_inliers_after_relocalisation >= min_tracked_inliers,
               "slam: min_inliers_after_relocalisation must be at least min_tracked_inliers");
   CheckOption(max_frames_between_keyframes >= 1, "slam: max_frames_between_keyframes must be >= 1");
+  CheckOption(keyframe_pause_after_relocalisation >= 0,
+              "slam: keyframe_pause_after_relocalisation must not be negative");
   CheckOption(relocalisation_candidates >= 1, "slam: relocalisation_candidates must be >= 1");
   CheckOption(local_ba_iterations >= 1, "slam: local_ba_iterations must be >= 1");
   CheckOption(keyframe_redundancy > 0.0 && keyframe_redundancy <= 1.0,

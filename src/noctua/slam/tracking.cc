@@ -408,7 +408,7 @@ bool Tracker::TrackLocalMap() {
 bool Tracker::NeedNewKeyFrame() const {
   const Frame& frame = *current_;
   const int keyframes = map_.NumKeyFrames();
-  if (frame.id < last_relocalisation_frame_id_ + options_.max_frames_between_keyframes &&
+  if (frame.id < last_relocalisation_frame_id_ + options_.keyframe_pause_after_relocalisation &&
       keyframes > options_.max_frames_between_keyframes) {
     return false;
   }
