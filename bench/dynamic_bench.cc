@@ -123,7 +123,7 @@ constexpr int kRepetitions = 5;
 void DetectArgs(benchmark::internal::Benchmark* b) {
   for (const int threads : {1, 2}) {
     for (const auto& [w, h] :
-         std::vector<std::pair<int, int>>{{320, 224}, {320, 256}, {640, 480}}) {
+         std::vector<std::pair<int, int>>{{256, 192}, {288, 224}, {320, 224}, {320, 256}, {640, 480}}) {
       b->Args({w, h, threads});
     }
   }
