@@ -1,11 +1,15 @@
 #include "noctua/dynamic/async_masks.h"
 
+#include <opencv2/imgproc.hpp>
+
 #include "noctua/util/error.h"
 
 namespace noctua::dynamic {
 
 void AsyncMaskOptions::Check() const {
   CheckOption(every_n >= 1, "async detection every_n must be at least 1");
+  CheckOption(carried_growth_px >= 0 && carried_growth_px <= 100,
+              "async detection carried_growth_px must be in [0, 100]");
 }
 
 AsyncMaskPipeline::AsyncMaskPipeline(std::shared_ptr<Detector> detector, MotionLevelTable table,
@@ -61,6 +65,7 @@ int AsyncMaskPipeline::outstanding() const {
 
 void AsyncMaskPipeline::Work() {
   long index = 0;
+  int age = 0;  // frames since last_mask was detected
   cv::Mat last_mask;
   for (;;) {
     cv::Mat frame;
@@ -75,8 +80,18 @@ void AsyncMaskPipeline::Work() {
       if (index % async_options_.every_n == 0 || last_mask.empty() ||
           last_mask.size() != frame.size()) {
         last_mask = BuildDynamicMask(detector_->Detect(frame), table_, mask_options_, frame.size());
+        age = 0;
+      } else {
+        ++age;
       }
-      result.mask = last_mask;
+      if (age > 0 && async_options_.carried_growth_px > 0) {
+        // Into a new image: last_mask's pixels are shared with the masks already handed out.
+        const int k = 2 * age * async_options_.carried_growth_px + 1;
+        cv::dilate(last_mask, result.mask,
+                   cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(k, k)));
+      } else {
+        result.mask = last_mask;
+      }
     } catch (...) {
       result.error = std::current_exception();
       last_mask = cv::Mat();

@@ -156,13 +156,28 @@ TEST_F(Fr3Test, AsyncMasksEqualSynchronousOnesAndCarryOver) {
     EXPECT_EQ(every.outstanding(), 0);
     EXPECT_THROW(every.Next(), Error);
   }
-  AsyncMaskPipeline third(shared, table, options, AsyncMaskOptions{3});
+  AsyncMaskPipeline third(shared, table, options, AsyncMaskOptions{3, 0});
   for (size_t i = 0; i < 6; ++i) third.Submit((*frames_)[i]);
   for (size_t i = 0; i < 6; ++i) {
     // Frames 0 and 3 are detected; 1, 2 and 4, 5 carry their masks over.
     EXPECT_EQ(cv::norm(third.Next(), expected[i - i % 3], cv::NORM_L1), 0.0) << "frame " << i;
   }
+  // Carried masks grow by carried_growth_px per frame of age: a disc of that radius times the age.
+  AsyncMaskPipeline growing(shared, table, options, AsyncMaskOptions{3, 4});
+  for (size_t i = 0; i < 6; ++i) growing.Submit((*frames_)[i]);
+  for (size_t i = 0; i < 6; ++i) {
+    const int age = static_cast<int>(i % 3);
+    cv::Mat grown = expected[i - i % 3].clone();
+    if (age > 0) {
+      cv::dilate(grown, grown,
+                 cv::getStructuringElement(cv::MORPH_ELLIPSE,
+                                           cv::Size(2 * 4 * age + 1, 2 * 4 * age + 1)));
+      EXPECT_GT(cv::countNonZero(grown), cv::countNonZero(expected[i - i % 3])) << "frame " << i;
+    }
+    EXPECT_EQ(cv::norm(growing.Next(), grown, cv::NORM_L1), 0.0) << "frame " << i;
+  }
   EXPECT_THROW(AsyncMaskPipeline(shared, table, options, AsyncMaskOptions{0}), Error);
+  EXPECT_THROW(AsyncMaskPipeline(shared, table, options, AsyncMaskOptions{3, -1}), Error);
 }
 
 TEST_F(Fr3Test, AsyncMasksPassOnDetectionErrors) {

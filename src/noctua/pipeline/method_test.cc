@@ -210,6 +210,54 @@ TEST(CreateMethod, PaperDetectingAheadMatchesInlineDetectionAndNeedsSubmittedFra
   EXPECT_LT(carried.stats.after_dynamic, carried.stats.after_mask);
 }
 
+// On the real walking people of fr3, a mask carried to the next frames lags behind them; growing
+// it with its age keeps the points of the carried frames off the people as detected in those
+// frames (the reference: detection on every frame).
+TEST(CreateMethod, GrowingCarriedMasksKeepsPointsOffThePeopleAsTheyMove) {
+  std::vector<std::filesystem::path> paths;
+  for (const auto& entry : std::filesystem::directory_iterator(
+           noctua::testing::DataDir() / "tum_fr3_walking_rpy_rgb16" / "rgb")) {
+    paths.push_back(entry.path());
+  }
+  std::sort(paths.begin(), paths.end());
+  std::vector<cv::Mat> frames;
+  for (const auto& path : paths) {
+    frames.push_back(noctua::testing::ReadImageOrThrow(path, cv::IMREAD_COLOR));
+  }
+  MethodConfig config;
+  config.detector_model = YoloV8n().string();
+  const auto detector = dynamic::LoadDetector(config.detector_model, config.detector);
+  std::vector<cv::Mat> people;  // each frame's own mask
+  for (const cv::Mat& frame : frames) {
+    people.push_back(dynamic::BuildDynamicMask(detector->Detect(frame), config.motion_levels,
+                                               config.dynamic_mask, frame.size()));
+  }
+  const auto points_on_people = [&](int growth) {
+    config.detect_ahead = true;
+    config.detect_ahead_options.every_n = 3;
+    config.detect_ahead_options.carried_growth_px = growth;
+    auto paper = CreateMethod("paper", config);
+    for (const cv::Mat& frame : frames) paper->detection_ahead()->Submit(frame);
+    int on_people = 0;
+    for (std::size_t i = 0; i < frames.size(); ++i) {
+      for (const cv::KeyPoint& point : paper->Run(frames[i]).keypoints) {
+        on_people += people[i].at<uchar>(cvRound(point.pt.y), cvRound(point.pt.x)) > 0;
+      }
+    }
+    return on_people;
+  };
+  const int fixed = points_on_people(0);
+  const int half = points_on_people(10);
+  const int grown = points_on_people(dynamic::AsyncMaskOptions().carried_growth_px);
+  std::printf(
+      "points on the people, every 3rd frame detected: growth 0 px %d, 10 px/frame %d, "
+      "default %d\n",
+      fixed, half, grown);
+  EXPECT_GT(fixed, 0);
+  EXPECT_LT(half, fixed);
+  EXPECT_LT(grown, half);
+}
+
 TEST(CreateMethod, PaperWithABadDetectorPathNamesTheFile) {
   MethodConfig config;
   config.detector_model = "/nonexistent/detector.onnx";
