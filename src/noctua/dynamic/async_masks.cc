@@ -85,10 +85,11 @@ void AsyncMaskPipeline::Work() {
         ++age;
       }
       if (age > 0 && async_options_.carried_growth_px > 0) {
-        // Into a new image: last_mask's pixels are shared with the masks already handed out.
+        // Into a new image: last_mask's pixels are shared with the masks already handed out. A
+        // square, not a disc: separable, under 1 ms where an 81-pixel disc costs 30 ms.
         const int k = 2 * age * async_options_.carried_growth_px + 1;
         cv::dilate(last_mask, result.mask,
-                   cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(k, k)));
+                   cv::getStructuringElement(cv::MORPH_RECT, cv::Size(k, k)));
       } else {
         result.mask = last_mask;
       }

@@ -18,10 +18,10 @@ struct AsyncMaskOptions {
   // detecting every frame caps a 2-core sequence near the detector's own rate; every 3rd frame
   // keeps a carried mask at most two frames (67 ms at 30 Hz) old (docs/dynamic.md, dynamic_bench).
   int every_n = 3;
-  // A carried mask grows by this many pixels per frame of age (frame k+1 of a mask detected on
-  // frame k: this much, k+2: twice), because what it covers moves on in the image. On the 16
-  // fr3 walking_rpy frames, every 3rd detected, points of `paper` on the people as detected in
-  // their own frame: 431 with 0 px, 98 with 10 px, 19 with 20 px (pipeline test
+  // A carried mask grows (a square dilation) by this many pixels per frame of age (frame k+1 of a
+  // mask detected on frame k: this much, k+2: twice), because what it covers moves on in the image.
+  // On the 16 fr3 walking_rpy frames, every 3rd detected, points of `paper` on the people as
+  // detected in their own frame: 431 with 0 px, 98 with 10 px, 19 with 20 px (pipeline test
   // CreateMethod.GrowingCarriedMasksKeepsPointsOffThePeopleAsTheyMove).
   int carried_growth_px = 20;
   void Check() const;

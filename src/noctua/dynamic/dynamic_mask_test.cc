@@ -162,16 +162,17 @@ TEST_F(Fr3Test, AsyncMasksEqualSynchronousOnesAndCarryOver) {
     // Frames 0 and 3 are detected; 1, 2 and 4, 5 carry their masks over.
     EXPECT_EQ(cv::norm(third.Next(), expected[i - i % 3], cv::NORM_L1), 0.0) << "frame " << i;
   }
-  // Carried masks grow by carried_growth_px per frame of age: a disc of that radius times the age.
+  // Carried masks grow by carried_growth_px per frame of age: a square of that half-width times
+  // the age.
   AsyncMaskPipeline growing(shared, table, options, AsyncMaskOptions{3, 4});
   for (size_t i = 0; i < 6; ++i) growing.Submit((*frames_)[i]);
   for (size_t i = 0; i < 6; ++i) {
     const int age = static_cast<int>(i % 3);
     cv::Mat grown = expected[i - i % 3].clone();
     if (age > 0) {
-      cv::dilate(grown, grown,
-                 cv::getStructuringElement(cv::MORPH_ELLIPSE,
-                                           cv::Size(2 * 4 * age + 1, 2 * 4 * age + 1)));
+      cv::dilate(
+          grown, grown,
+          cv::getStructuringElement(cv::MORPH_RECT, cv::Size(2 * 4 * age + 1, 2 * 4 * age + 1)));
       EXPECT_GT(cv::countNonZero(grown), cv::countNonZero(expected[i - i % 3])) << "frame " << i;
     }
     EXPECT_EQ(cv::norm(growing.Next(), grown, cv::NORM_L1), 0.0) << "frame " << i;
