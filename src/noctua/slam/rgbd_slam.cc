@@ -1,5 +1,6 @@
 #include "noctua/slam/rgbd_slam.h"
 
+#include <algorithm>
 #include <condition_variable>
 #include <deque>
 #include <exception>
@@ -66,21 +67,28 @@ io::Trajectory RgbdSlam::Trajectory() const {
 
 namespace {
 
+struct LoadedFrame {
+  io::FrameImages images;
+  double timestamp = 0.0;
+  double load_ms = 0.0;
+};
+
 struct PreparedFrame {
   RgbdSlam::Extracted extracted;
   double load_ms = 0.0;
 };
 
-// Frames 0..count-1 loaded and extracted in order on a thread of its own, up to `capacity` ahead
-// of the one the tracking takes, so that a slow frame on either side (a keyframe's local BA, a
-// frame whose mask is late) is absorbed instead of stalling the other side.
-class ExtractionQueue {
+// Items 0..count-1 made in order on a thread of their own, up to `capacity` ahead of the one
+// the consumer takes, so that a slow item on either side (a keyframe's local BA, a frame whose
+// mask is late) is absorbed instead of stalling the other side.
+template <typename T>
+class OrderedProducer {
  public:
-  ExtractionQueue(int count, int capacity, std::function<PreparedFrame(int)> prepare)
-      : capacity_(capacity), prepare_(std::move(prepare)) {
+  OrderedProducer(int count, int capacity, std::function<T(int)> make)
+      : capacity_(capacity), make_(std::move(make)) {
     worker_ = std::thread([this, count] { Work(count); });
   }
-  ~ExtractionQueue() {
+  ~OrderedProducer() {
     {
       std::lock_guard lock(mutex_);
       stop_ = true;
@@ -88,19 +96,19 @@ class ExtractionQueue {
     changed_.notify_all();
     worker_.join();
   }
-  ExtractionQueue(const ExtractionQueue&) = delete;
-  ExtractionQueue& operator=(const ExtractionQueue&) = delete;
+  OrderedProducer(const OrderedProducer&) = delete;
+  OrderedProducer& operator=(const OrderedProducer&) = delete;
 
-  // The next frame in order; rethrows what loading or extracting it threw.
-  PreparedFrame Pop() {
+  // The next item in order; rethrows what making it threw.
+  T Pop() {
     std::unique_lock lock(mutex_);
     changed_.wait(lock, [this] { return !ready_.empty() || error_; });
     if (ready_.empty()) std::rethrow_exception(error_);
-    PreparedFrame frame = std::move(ready_.front());
+    T item = std::move(ready_.front());
     ready_.pop_front();
     lock.unlock();
     changed_.notify_all();
-    return frame;
+    return item;
   }
 
  private:
@@ -114,9 +122,9 @@ class ExtractionQueue {
       }
       bool failed = false;
       try {
-        PreparedFrame frame = prepare_(i);
+        T item = make_(i);
         std::lock_guard lock(mutex_);
-        ready_.push_back(std::move(frame));
+        ready_.push_back(std::move(item));
       } catch (...) {
         std::lock_guard lock(mutex_);
         error_ = std::current_exception();
@@ -128,10 +136,10 @@ class ExtractionQueue {
   }
 
   const int capacity_;
-  std::function<PreparedFrame(int)> prepare_;
+  std::function<T(int)> make_;
   std::mutex mutex_;
   std::condition_variable changed_;
-  std::deque<PreparedFrame> ready_;
+  std::deque<T> ready_;
   std::exception_ptr error_;
   bool stop_ = false;
   std::thread worker_;  // last: starts after everything it uses exists
@@ -152,51 +160,57 @@ SequenceRun RunSequence(const io::Sequence& sequence, double depth_factor,
   if (run_options.lookahead && run_options.lookahead_frames < 1) {
     throw Error("slam: lookahead_frames must be at least 1");
   }
-  struct Loaded {
-    io::FrameImages images;
-    double timestamp = 0.0;
-    double load_ms = 0.0;
-  };
   const auto load = [&](int i) {
     Stopwatch watch;
     const io::Frame& frame = sequence.frame(static_cast<std::size_t>(i));
-    Loaded loaded{sequence.Load(frame, depth_factor), frame.timestamp, 0.0};
+    LoadedFrame loaded{sequence.Load(frame, depth_factor), frame.timestamp, 0.0};
     if (run_options.transform_image) {
       loaded.images.bgr = run_options.transform_image(i, loaded.images.bgr);
     }
     loaded.load_ms = watch.ElapsedMs();
+    if (run_options.lookahead) run_options.lookahead(loaded.images.bgr);
     return loaded;
   };
-  // Frames loaded (and handed to the lookahead) before their extraction. Only one thread calls
-  // prepare(), so the queue needs no lock.
-  std::deque<Loaded> ahead;
-  int next_to_load = 0;
-  const int load_ahead = run_options.lookahead ? run_options.lookahead_frames : 0;
-  const auto prepare = [&](int i) {
-    while (next_to_load < count && next_to_load <= i + load_ahead) {
-      ahead.push_back(load(next_to_load++));
-      if (run_options.lookahead) run_options.lookahead(ahead.back().images.bgr);
-    }
-    Loaded loaded = std::move(ahead.front());
-    ahead.pop_front();
+  const auto extract = [&](LoadedFrame loaded) {
     PreparedFrame prepared;
     prepared.load_ms = loaded.load_ms;
     prepared.extracted = slam.Extract(loaded.images.bgr, loaded.images.depth_m, loaded.timestamp);
     return prepared;
   };
+  const int load_ahead = run_options.lookahead ? run_options.lookahead_frames : 0;
+  // One thread: frames loaded (and handed to the lookahead) up to load_ahead before their
+  // extraction, in a plain queue.
+  std::deque<LoadedFrame> ahead;
+  int next_to_load = 0;
+  const auto prepare_in_line = [&](int i) {
+    while (next_to_load < count && next_to_load <= i + load_ahead) {
+      ahead.push_back(load(next_to_load++));
+    }
+    LoadedFrame loaded = std::move(ahead.front());
+    ahead.pop_front();
+    return extract(std::move(loaded));
+  };
   SequenceRun run;
   bool started = false;
   const Stopwatch run_watch;
-  // Declared after everything prepare() uses, so that its thread has stopped before they go.
-  std::optional<ExtractionQueue> queue;
-  if (run_options.overlap_extraction) queue.emplace(count, run_options.extraction_queue, prepare);
+  // Overlapped: loading (PNG decoding, as long as a `paper` extraction on one core) and
+  // extraction each on a thread of their own, frames flowing in order from one to the next.
+  // Declared after everything they use and in this order, so that the extraction thread (which
+  // takes from the loader) stops first.
+  std::optional<OrderedProducer<LoadedFrame>> loader;
+  std::optional<OrderedProducer<PreparedFrame>> extraction;
+  if (run_options.overlap_extraction) {
+    loader.emplace(count, std::max(2, load_ahead), load);
+    extraction.emplace(count, run_options.extraction_queue,
+                       [&](int) { return extract(loader->Pop()); });
+  }
   for (int i = 0; i < count; ++i) {
     if (run_options.stop && run_options.stop()) {
       run.interrupted = true;
       break;
     }
     Stopwatch total;
-    PreparedFrame prepared = queue ? queue->Pop() : prepare(i);
+    PreparedFrame prepared = extraction ? extraction->Pop() : prepare_in_line(i);
     const double timestamp = prepared.extracted.timestamp;
     const TrackResult result = slam.Track(std::move(prepared.extracted));
     FrameOutcome outcome;

@@ -90,9 +90,9 @@ struct RunOptions {
   // Checked before every frame; when it returns true the run ends there and returns what was
   // tracked so far (e.g. on Ctrl-C, so the trajectory up to that point is not lost).
   std::function<bool()> stop;
-  // Load and extract the next frames on a second thread while frame i is tracked (same results:
-  // the extraction of a frame does not depend on tracking). Off: one thread, stage by stage.
-  // transform_image is then called on that thread.
+  // Load the next frames on one thread and extract them on another while frame i is tracked
+  // (same results: the extraction of a frame does not depend on tracking). Off: one thread,
+  // stage by stage. transform_image and lookahead are then called on the loading thread.
   bool overlap_extraction = true;
   // Frames extracted ahead at most (overlap_extraction): a queue deeper than one absorbs the
   // tracking's slow frames (a keyframe's local BA) and the extraction's (a late mask).
@@ -100,7 +100,8 @@ struct RunOptions {
   // Called with each frame's colour image (after transform_image), in frame order, up to
   // `lookahead_frames` frames before that frame is extracted: e.g. to detect dynamic regions on
   // a thread of their own (pipeline::FeatureMethod::detection_ahead) early enough that the
-  // extraction finds the mask ready. Frames are loaded that much ahead.
+  // extraction finds the mask ready (frames are loaded that much ahead; overlapped, the loader
+  // may be less far ahead when it is the slower side, never further).
   std::function<void(const cv::Mat&)> lookahead;
   int lookahead_frames = 3;
 };
