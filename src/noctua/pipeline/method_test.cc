@@ -163,20 +163,26 @@ TEST(CreateMethod, PaperWithADetectorLeavesNoPointOnThePeopleOfFr3Walking) {
   }
 }
 
-// Detection ahead on its own thread gives, with every frame detected, exactly the points of
-// detection in line; with every 3rd frame detected, the frames between carry the last mask.
-TEST(CreateMethod, PaperDetectingAheadMatchesInlineDetectionAndNeedsSubmittedFrames) {
+// The first `count` frames of the fr3 walking_rpy sample (16 in all), in time order.
+std::vector<cv::Mat> Fr3WalkingFrames(std::size_t count) {
   std::vector<std::filesystem::path> paths;
   for (const auto& entry : std::filesystem::directory_iterator(
            noctua::testing::DataDir() / "tum_fr3_walking_rpy_rgb16" / "rgb")) {
     paths.push_back(entry.path());
   }
   std::sort(paths.begin(), paths.end());
-  ASSERT_GE(paths.size(), 4u);
+  EXPECT_GE(paths.size(), count);
   std::vector<cv::Mat> frames;
-  for (std::size_t i = 0; i < 4; ++i) {
+  for (std::size_t i = 0; i < std::min(count, paths.size()); ++i) {
     frames.push_back(noctua::testing::ReadImageOrThrow(paths[i], cv::IMREAD_COLOR));
   }
+  return frames;
+}
+
+// Detection ahead on its own thread gives, with every frame detected, exactly the points of
+// detection in line; with every 3rd frame detected, the frames between carry the last mask.
+TEST(CreateMethod, PaperDetectingAheadMatchesInlineDetectionAndNeedsSubmittedFrames) {
+  const std::vector<cv::Mat> frames = Fr3WalkingFrames(4);
   MethodConfig config;
   config.detector_model = YoloV8n().string();
   auto inline_paper = CreateMethod("paper", config);
@@ -214,16 +220,7 @@ TEST(CreateMethod, PaperDetectingAheadMatchesInlineDetectionAndNeedsSubmittedFra
 // it with its age keeps the points of the carried frames off the people as detected in those
 // frames (the reference: detection on every frame).
 TEST(CreateMethod, GrowingCarriedMasksKeepsPointsOffThePeopleAsTheyMove) {
-  std::vector<std::filesystem::path> paths;
-  for (const auto& entry : std::filesystem::directory_iterator(
-           noctua::testing::DataDir() / "tum_fr3_walking_rpy_rgb16" / "rgb")) {
-    paths.push_back(entry.path());
-  }
-  std::sort(paths.begin(), paths.end());
-  std::vector<cv::Mat> frames;
-  for (const auto& path : paths) {
-    frames.push_back(noctua::testing::ReadImageOrThrow(path, cv::IMREAD_COLOR));
-  }
+  const std::vector<cv::Mat> frames = Fr3WalkingFrames(16);
   MethodConfig config;
   config.detector_model = YoloV8n().string();
   const auto detector = dynamic::LoadDetector(config.detector_model, config.detector);
