@@ -181,7 +181,8 @@ void RunSlam(const SlamArguments& args) {
                       {"keyframes", run.keyframes},
                       {"map_points", run.map_points},
                       {"keyframes_created", run.keyframes_created},
-                      {"map_points_created", run.map_points_created}};
+                      {"map_points_created", run.map_points_created},
+                      {"map_points_allocated", run.map_points_allocated}};
   std::string markdown = "| stage | median ms | mean ms | max ms |\n|---|---|---|---|\n";
   for (const auto& stage : stages) {
     std::vector<double> samples;

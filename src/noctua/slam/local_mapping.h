@@ -17,6 +17,8 @@ class LocalMapper {
       : options_(options), pyramid_(pyramid) {}
 
   void ProcessKeyFrame(KeyFrame* keyframe);
+  // New points still on probation (culled if rarely matched): the mapper holds them.
+  const std::list<MapPoint*>& recent_points() const { return recent_points_; }
 
  private:
   void CullRecentPoints(const KeyFrame* keyframe);

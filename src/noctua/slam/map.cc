@@ -216,9 +216,32 @@ KeyFrame* Map::AddKeyFrame(const Frame& frame) {
 }
 
 MapPoint* Map::AddMapPoint(const Eigen::Vector3d& position, KeyFrame* reference) {
-  points_.push_back(
-      std::make_unique<MapPoint>(static_cast<long>(points_.size()), position, reference));
+  points_.push_back(std::make_unique<MapPoint>(next_point_id_++, position, reference));
   return points_.back().get();
+}
+
+int Map::ReclaimMapPoints(const std::vector<const std::vector<MapPoint*>*>& held) {
+  const long pass = ++reclaim_pass_;
+  auto mark = [pass](MapPoint* point) {
+    // A merged point forwards to the one that replaced it: whoever holds it may follow the chain.
+    for (; point != nullptr && point->reclaim_mark_ != pass; point = point->replaced_by_) {
+      point->reclaim_mark_ = pass;
+    }
+  };
+  // A culled keyframe has already given its points back (KeyFrame::SetBad).
+  for (const auto& keyframe : keyframes_) {
+    if (keyframe->bad()) continue;
+    for (MapPoint* point : keyframe->map_points()) mark(point);
+  }
+  for (const auto* points : held) {
+    for (MapPoint* point : *points) mark(point);
+  }
+  const auto before = points_.size();
+  // Order is kept (stable), so that anything iterating over the points stays deterministic.
+  std::erase_if(points_, [pass](const std::unique_ptr<MapPoint>& point) {
+    return point->bad() && point->reclaim_mark_ != pass;
+  });
+  return static_cast<int>(before - points_.size());
 }
 
 std::vector<KeyFrame*> Map::KeyFrames() const {

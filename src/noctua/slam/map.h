@@ -20,8 +20,9 @@ struct KeyFrameIdLess {
   bool operator()(const KeyFrame* a, const KeyFrame* b) const;
 };
 
-// A 3D point of the map with the keyframes that observe it. Points are never freed during a run
-// (a culled point is marked bad), so raw pointers held by frames stay valid.
+// A 3D point of the map with the keyframes that observe it. A culled point is marked bad and
+// stays allocated while anything may still hold it (a frame, the tracker's local map, a point
+// that was merged into it); Map::ReclaimMapPoints frees it once nothing does.
 class MapPoint {
  public:
   MapPoint(long id, const Eigen::Vector3d& position, KeyFrame* reference);
@@ -91,6 +92,9 @@ class MapPoint {
   int visible_ = 1;
   int found_ = 1;
   bool bad_ = false;
+  long reclaim_mark_ = -1;  // the last Map::ReclaimMapPoints pass that found the point held
+
+  friend class Map;
 };
 
 // A frame kept in the map: its features, pose, map points and covisibility links.
@@ -157,12 +161,23 @@ class Map {
   int NumKeyFrames() const;
   int NumMapPoints() const;
   const std::vector<std::unique_ptr<KeyFrame>>& all_keyframes() const { return keyframes_; }
-  // Every point ever made, culled ones included (they stay allocated, see MapPoint).
-  int NumMapPointsCreated() const { return static_cast<int>(points_.size()); }
+  // Every point ever made, culled and freed ones included.
+  long NumMapPointsCreated() const { return next_point_id_; }
+  // Points still allocated: the good ones and the culled ones not yet reclaimed.
+  int NumMapPointsAllocated() const { return static_cast<int>(points_.size()); }
+
+  // Frees the culled points that nothing refers to any more, so that memory follows the size of
+  // the map rather than the length of the run. Keyframes' points are found here; `held` lists
+  // the pointers kept outside the map (frames, the tracker's local map, the mapper's recent
+  // points). A held point keeps the chain of points it was merged into. Returns how many points
+  // were freed; any other pointer to a culled point is invalid after this call.
+  int ReclaimMapPoints(const std::vector<const std::vector<MapPoint*>*>& held);
 
  private:
   std::vector<std::unique_ptr<KeyFrame>> keyframes_;
   std::vector<std::unique_ptr<MapPoint>> points_;
+  long next_point_id_ = 0;
+  long reclaim_pass_ = 0;
 };
 
 }  // namespace noctua::slam

@@ -236,6 +236,7 @@ SequenceRun RunSequence(const io::Sequence& sequence, double depth_factor,
   run.map_points = slam.tracker().map().NumMapPoints();
   run.keyframes_created = static_cast<int>(slam.tracker().map().all_keyframes().size());
   run.map_points_created = slam.tracker().map().NumMapPointsCreated();
+  run.map_points_allocated = slam.tracker().map().NumMapPointsAllocated();
   return run;
 }
 

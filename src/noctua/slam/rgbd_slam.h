@@ -72,10 +72,13 @@ struct SequenceRun {
   std::vector<int> lost_frames;  // indices of frames not tracked after the map was started
   int keyframes = 0;
   int map_points = 0;
-  int keyframes_created = 0;   // culled ones included: they stay allocated until the run ends
-  int map_points_created = 0;  // likewise
-  bool interrupted = false;    // RunOptions::stop ended the run before the last frame
-  double wall_s = 0.0;         // whole run, loading included
+  // Culled keyframes stay allocated (their pose only: frames refer to them); culled points are
+  // freed once nothing holds them.
+  int keyframes_created = 0;
+  long map_points_created = 0;
+  int map_points_allocated = 0;
+  bool interrupted = false;  // RunOptions::stop ended the run before the last frame
+  double wall_s = 0.0;       // whole run, loading included
   double FramesPerSecond() const {
     return wall_s > 0.0 ? static_cast<double>(frames.size()) / wall_s : 0.0;
   }

@@ -99,7 +99,19 @@ TrackResult Tracker::Track(Frame frame) {
   // A lost frame does not become the last frame: the motion model and relocalisation compare
   // with the last frame that was tracked.
   if (ok) last_ = std::move(current_);
+  // Points are culled only while a keyframe is mapped.
+  if (result.new_keyframe) ReclaimMapPoints();
   return result;
+}
+
+void Tracker::ReclaimMapPoints() {
+  const std::vector<MapPoint*> recent(mapper_.recent_points().begin(),
+                                      mapper_.recent_points().end());
+  std::vector<const std::vector<MapPoint*>*> held = {&local_points_, &recent};
+  for (const Frame* frame : {last_.get(), current_.get()}) {
+    if (frame != nullptr) held.push_back(&frame->map_points);
+  }
+  map_.ReclaimMapPoints(held);
 }
 
 void Tracker::ClearTemporaryPoints() {

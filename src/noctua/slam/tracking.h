@@ -62,6 +62,7 @@ class Tracker {
   void CreateNewKeyFrame();
   int DiscardOutliers();
   void ClearTemporaryPoints();
+  void ReclaimMapPoints();
 
   SlamOptions options_;
   ScalePyramid pyramid_;

@@ -1,0 +1,93 @@
+#include "noctua/slam/map.h"
+
+#include <gtest/gtest.h>
+
+#include <memory>
+#include <vector>
+
+namespace noctua::slam {
+namespace {
+
+// Two keyframes of six keypoints each, all with a depth of 2 m (observations weigh 2 each).
+class MapReclaimTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    geometry::Intrinsics intrinsics;
+    intrinsics.fx = intrinsics.fy = 500.0;
+    intrinsics.cx = 320.0;
+    intrinsics.cy = 240.0;
+    intrinsics.width = 640;
+    intrinsics.height = 480;
+    const geometry::PinholeCamera camera(intrinsics, geometry::Distortion{});
+    std::vector<cv::KeyPoint> keypoints;
+    for (int i = 0; i < kPoints; ++i) keypoints.emplace_back(100.0f + 50.0f * i, 200.0f, 31.0f);
+    const cv::Mat descriptors(kPoints, 32, CV_8U, cv::Scalar(0));
+    const cv::Mat depth(480, 640, CV_32F, cv::Scalar(2.0f));
+    auto features =
+        std::make_shared<const FrameFeatures>(keypoints, descriptors, depth, camera, 40.0, 0.1);
+    first_ = map_.AddKeyFrame(Frame(0, 0.0, features));
+    second_ = map_.AddKeyFrame(Frame(1, 1.0, features));
+    for (int i = 0; i < kPoints; ++i) {
+      MapPoint* point = map_.AddMapPoint(Eigen::Vector3d(0.1 * i, 0.0, 2.0), first_);
+      for (KeyFrame* keyframe : {first_, second_}) {
+        keyframe->SetMapPoint(i, point);
+        point->AddObservation(keyframe, i);
+      }
+      points_.push_back(point);
+    }
+  }
+
+  static constexpr int kPoints = 6;
+  Map map_;
+  KeyFrame* first_ = nullptr;
+  KeyFrame* second_ = nullptr;
+  std::vector<MapPoint*> points_;
+};
+
+TEST_F(MapReclaimTest, GoodPointsAreNeverFreed) {
+  EXPECT_EQ(map_.ReclaimMapPoints({}), 0);
+  EXPECT_EQ(map_.NumMapPointsAllocated(), kPoints);
+  EXPECT_EQ(map_.NumMapPoints(), kPoints);
+}
+
+// Culled points go unless something outside the map still holds them; a held point that was
+// merged into another keeps that one too, since its holder may follow the chain.
+TEST_F(MapReclaimTest, FreesCulledPointsThatNothingHolds) {
+  points_[0]->SetBad();             // culled, nobody holds it: freed
+  points_[1]->SetBad();             // culled but a frame still holds it: kept
+  points_[2]->Replace(points_[3]);  // merged into 3: 2 is bad and held, 3 is good
+  points_[3]->Replace(points_[4]);  // ...then 3 into 4: the chain 2 -> 3 -> 4
+  const std::vector<MapPoint*> held = {points_[1], points_[2], nullptr};
+  EXPECT_EQ(map_.NumMapPoints(), 2);  // 4 and 5
+  const int freed = map_.ReclaimMapPoints({&held});
+  EXPECT_EQ(freed, 1);  // only point 0
+  EXPECT_EQ(map_.NumMapPointsAllocated(), kPoints - 1);
+  EXPECT_EQ(map_.NumMapPointsCreated(), kPoints);
+  // The chain is intact and readable (AddressSanitizer would flag a freed link).
+  EXPECT_EQ(points_[2]->replaced(), points_[4]);
+  EXPECT_TRUE(points_[3]->bad());
+
+  // Once the frame lets go, the rest of the culled points go too; the good ones stay.
+  EXPECT_EQ(map_.ReclaimMapPoints({}), 3);
+  EXPECT_EQ(map_.NumMapPointsAllocated(), 2);
+  EXPECT_EQ(map_.NumMapPoints(), 2);
+  EXPECT_EQ(first_->map_point(4), points_[4]);
+  EXPECT_EQ(first_->map_point(5), points_[5]);
+  // New points get fresh ids: no id is reused after a point was freed.
+  MapPoint* added = map_.AddMapPoint(Eigen::Vector3d::Zero(), first_);
+  EXPECT_EQ(added->id(), kPoints);
+}
+
+// A culled keyframe gives its observations back: the points it leaves with one observation are
+// culled (ORB-SLAM's rule), and freed by the next pass; the keyframe's slots are empty.
+TEST_F(MapReclaimTest, PointsLeftByACulledKeyFrameAreFreed) {
+  second_->SetBad();
+  for (MapPoint* point : points_) EXPECT_TRUE(point->bad());
+  for (MapPoint* point : second_->map_points()) EXPECT_EQ(point, nullptr);
+  EXPECT_EQ(map_.ReclaimMapPoints({}), kPoints);
+  EXPECT_EQ(map_.NumMapPointsAllocated(), 0);
+  for (MapPoint* point : first_->map_points()) EXPECT_EQ(point, nullptr);
+}
+
+}  // namespace
+}  // namespace noctua::slam
