@@ -27,7 +27,8 @@ void LocalMapper::ProcessKeyFrame(KeyFrame* keyframe) {
   CullRecentPoints(keyframe);
   if (options_.fuse_neighbours) FuseWithNeighbours(keyframe);
   if (options_.local_ba) {
-    LocalBundleAdjustment(keyframe, pyramid_, options_.bf, options_.local_ba_iterations);
+    LocalBundleAdjustment(keyframe, pyramid_, options_.bf, options_.local_ba_iterations,
+                          options_.local_ba_max_covisibles);
   }
   CullRedundantKeyFrames(keyframe);
 }

@@ -126,11 +126,16 @@ int OptimizePose(Frame& frame, const ScalePyramid& pyramid, double bf) {
 }
 
 void LocalBundleAdjustment(KeyFrame* keyframe, const ScalePyramid& pyramid, double bf,
-                           int iterations) {
-  // Local keyframes: this one and its covisible ones; local points: all they see.
+                           int iterations, int max_covisibles) {
+  // Local keyframes: this one and its covisible ones (the most covisible, when bounded); local
+  // points: all they see.
   std::vector<KeyFrame*> local = {keyframe};
-  for (const auto& [other, weight] : keyframe->connections()) {
-    if (!other->bad()) local.push_back(other);
+  if (max_covisibles > 0) {
+    for (KeyFrame* other : keyframe->BestCovisibles(max_covisibles)) local.push_back(other);
+  } else {
+    for (const auto& [other, weight] : keyframe->connections()) {
+      if (!other->bad()) local.push_back(other);
+    }
   }
   std::set<KeyFrame*, KeyFrameIdLess> local_set(local.begin(), local.end());
   std::vector<MapPoint*> points;

@@ -18,9 +18,10 @@ inline constexpr double kChi2Stereo = 7.815;
 int OptimizePose(Frame& frame, const ScalePyramid& pyramid, double bf);
 
 // Local bundle adjustment around `keyframe` (Ceres, Huber loss): the keyframe and its covisible
-// keyframes and all their points are refined; other keyframes that see those points are held
-// fixed, as is the first keyframe. Observations that stay outliers are removed from the map.
+// keyframes (at most `max_covisibles`, the most covisible first; 0: all) and all their points are
+// refined; other keyframes that see those points are held fixed, as is the first keyframe.
+// Observations that stay outliers are removed from the map.
 void LocalBundleAdjustment(KeyFrame* keyframe, const ScalePyramid& pyramid, double bf,
-                           int iterations);
+                           int iterations, int max_covisibles);
 
 }  // namespace noctua::slam

@@ -20,6 +20,7 @@ void SlamOptions::Check() const {
               "slam: keyframe_pause_after_relocalisation must not be negative");
   CheckOption(relocalisation_candidates >= 1, "slam: relocalisation_candidates must be >= 1");
   CheckOption(local_ba_iterations >= 1, "slam: local_ba_iterations must be >= 1");
+  CheckOption(local_ba_max_covisibles >= 0, "slam: local_ba_max_covisibles must be >= 0");
   CheckOption(keyframe_redundancy > 0.0 && keyframe_redundancy <= 1.0,
               "slam: keyframe_redundancy must be in (0, 1]");
 }
