@@ -202,7 +202,19 @@ void KeyFrame::SetBad() {
     map_points_[i] = nullptr;
     if (point != nullptr) point->EraseObservation(this);
   }
+  std::vector<MapPoint*>().swap(map_points_);
   features_.reset();
+}
+
+void KeyFrame::SetMapPoint(int i, MapPoint* point) {
+  const auto index = static_cast<std::size_t>(i);
+  if (index < map_points_.size()) {
+    map_points_[index] = point;
+  } else if (point != nullptr) {
+    throw Error("keyframe " + std::to_string(id_) +
+                (bad_ ? " was culled" : " has no keypoint " + std::to_string(i)) +
+                ": it cannot hold a map point there");
+  }
 }
 
 void KeyFrame::ThrowReleasedFeatures() const {

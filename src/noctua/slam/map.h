@@ -116,8 +116,13 @@ class KeyFrame {
   bool bad() const { return bad_; }
 
   const std::vector<MapPoint*>& map_points() const { return map_points_; }
-  MapPoint* map_point(int i) const { return map_points_[static_cast<std::size_t>(i)]; }
-  void SetMapPoint(int i, MapPoint* point) { map_points_[static_cast<std::size_t>(i)] = point; }
+  // A culled keyframe holds no points: map_points() is empty and map_point(i) is nullptr.
+  MapPoint* map_point(int i) const {
+    const auto index = static_cast<std::size_t>(i);
+    return index < map_points_.size() ? map_points_[index] : nullptr;
+  }
+  // Throws noctua::Error when a point is given to a culled keyframe.
+  void SetMapPoint(int i, MapPoint* point);
   int IndexOf(const MapPoint* point) const;
   // Good map points whose weighted_observations() reach `min_observations` (ORB-SLAM's count).
   int TrackedMapPoints(int min_observations) const;
@@ -132,9 +137,10 @@ class KeyFrame {
   void EraseConnection(KeyFrame* other);
 
   // Removes the keyframe from the map's graph: its links and its observations. It also releases
-  // the features (keypoints, descriptors, search grid: ~0.3 MB), which nothing reads once the
-  // keyframe is out of the graph; only its pose stays, for the frames that refer to it. Without
-  // this, a long run grew by every keyframe ever culled although the map stayed the same size.
+  // the features (keypoints, descriptors, search grid: ~0.3 MB) and its point slots (8 kB), which
+  // nothing reads once the keyframe is out of the graph; only its pose stays, for the frames that
+  // refer to it. Without this, a long run grew by every keyframe ever culled although the map
+  // stayed the same size.
   void SetBad();
 
  private:

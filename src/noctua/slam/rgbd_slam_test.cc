@@ -109,6 +109,9 @@ TEST_F(RgbdSlamTest, CulledKeyFrameReleasesItsFeaturesAndKeepsItsPose) {
   EXPECT_TRUE(second->bad());
   EXPECT_TRUE(second_features.expired());
   EXPECT_THROW(second->features(), Error);
+  EXPECT_TRUE(second->map_points().empty());  // its point slots are given back too
+  EXPECT_EQ(second->map_point(0), nullptr);
+  EXPECT_THROW(second->SetMapPoint(0, map.AddMapPoint(Eigen::Vector3d::Zero(), first)), Error);
   EXPECT_TRUE(second->pose_cw().isApprox(second_frame.pose_cw));
   EXPECT_EQ(map.NumKeyFrames(), 1);
   EXPECT_EQ(first->features().size(), static_cast<int>(keypoints.size()));
