@@ -103,12 +103,10 @@ void BM_Sequence(benchmark::State& state, Mode mode) {
   if (mode == Mode::kExtractOnly || mode == Mode::kSerial) {
     auto pass = [&] {
       for (const cv::Mat& frame : frames) {
-        if (mode == Mode::kExtractOnly) {
-          benchmark::DoNotOptimize(paper->Run(frame).keypoints);
-          continue;
-        }
-        const cv::Mat mask = noctua::dynamic::BuildDynamicMask(detector->Detect(frame), table,
-                                                               mask_options, frame.size());
+        const cv::Mat mask = mode == Mode::kExtractOnly
+                                 ? cv::Mat()
+                                 : noctua::dynamic::BuildDynamicMask(detector->Detect(frame), table,
+                                                                     mask_options, frame.size());
         benchmark::DoNotOptimize(paper->Run(frame, mask).keypoints);
       }
     };

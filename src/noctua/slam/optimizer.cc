@@ -4,6 +4,7 @@
 
 #include <array>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <set>
 
@@ -130,13 +131,8 @@ void LocalBundleAdjustment(KeyFrame* keyframe, const ScalePyramid& pyramid, doub
   // Local keyframes: this one and its covisible ones (the most covisible, when bounded); local
   // points: all they see.
   std::vector<KeyFrame*> local = {keyframe};
-  if (max_covisibles > 0) {
-    for (KeyFrame* other : keyframe->BestCovisibles(max_covisibles)) local.push_back(other);
-  } else {
-    for (const auto& [other, weight] : keyframe->connections()) {
-      if (!other->bad()) local.push_back(other);
-    }
-  }
+  const int count = max_covisibles > 0 ? max_covisibles : std::numeric_limits<int>::max();
+  for (KeyFrame* other : keyframe->BestCovisibles(count)) local.push_back(other);
   std::set<KeyFrame*, KeyFrameIdLess> local_set(local.begin(), local.end());
   std::vector<MapPoint*> points;
   for (KeyFrame* k : local) {
