@@ -6,6 +6,7 @@
 #include <cstring>
 #include <mutex>
 #include <numbers>
+#include <opencv2/core/hal/hal.hpp>
 #include <opencv2/core/hal/intrin.hpp>
 #include <opencv2/imgproc.hpp>
 #include <string>
@@ -198,6 +199,17 @@ double NoiseThreshold(double median_amplitude, int nscale, double mult, double k
   return noise_mean + k * noise_sigma;
 }
 
+// The feature normal from the angle of the summed monogenic vector (h1, -h2) in degrees, as
+// radians in [0, pi). OpenCV's fast arc tangent (about 0.3 degree error) is ample for NMS, which
+// works in whole degrees.
+float NormalFromDegrees(float degrees) {
+  constexpr auto kPiF = static_cast<float>(kPi);
+  float a = degrees * (kPiF / 180.0f);
+  if (a >= kPiF) a -= kPiF;
+  if (a >= kPiF) a = 0.0f;
+  return a;
+}
+
 // out = spectrum * real_filter, element-wise (complex times real).
 void MultiplyByReal(const cv::Mat& spectrum, const cv::Mat& filter, cv::Mat& out) {
   out.create(spectrum.size(), CV_32FC2);
@@ -384,6 +396,25 @@ FastPhaseCongruency::FastPhaseCongruency(const FastPhaseCongruencyOptions& optio
 FastPhaseCongruency::~FastPhaseCongruency() = default;
 
 PhaseCongruency FastPhaseCongruency::Compute(const cv::Mat& gray) const {
+  if (options_.downscale == 1) return ComputeAtWorkingSize(gray);
+  // The working-size results go to this thread's scratch, since only their interpolation is
+  // returned.
+  FastWorkspace& ws = ThreadWorkspace();
+  ComputeInto(gray, ws.pc, ws.orientation);
+  PhaseCongruency result;
+  cv::resize(ws.pc, result.max_moment, gray.size(), 0, 0, cv::INTER_LINEAR);
+  cv::resize(ws.orientation, result.orientation, gray.size(), 0, 0, cv::INTER_NEAREST);
+  return result;
+}
+
+PhaseCongruency FastPhaseCongruency::ComputeAtWorkingSize(const cv::Mat& gray) const {
+  PhaseCongruency result;
+  ComputeInto(gray, result.max_moment, result.orientation);
+  return result;
+}
+
+void FastPhaseCongruency::ComputeInto(const cv::Mat& gray, cv::Mat& pc,
+                                      cv::Mat& orientation) const {
   const FastPhaseCongruencyOptions& o = options_;
   CheckGray(gray, kMinPhaseCongruencySize * o.downscale);
   FastWorkspace& ws = ThreadWorkspace();
@@ -535,19 +566,11 @@ PhaseCongruency FastPhaseCongruency::Compute(const cv::Mat& gray) const {
     }
   }
 
-  // At full resolution these are the results, so they must be fresh, not the workspace's.
-  cv::Mat pc = o.downscale > 1 ? ws.pc : cv::Mat();
-  cv::Mat orientation = o.downscale > 1 ? ws.orientation : cv::Mat();
   pc.create(rows, cols, CV_32F);
   orientation.create(rows, cols, CV_32F);
-  if (o.downscale > 1) {
-    ws.pc = pc;
-    ws.orientation = orientation;
-  }
   const float eps = static_cast<float>(o.epsilon);
   const float weight_scale = 1.0f / static_cast<float>(o.nscale - 1);
   const float t = static_cast<float>(threshold);
-  const float pi = static_cast<float>(kPi);
   const float cut_off = static_cast<float>(o.cut_off);
   const float g = static_cast<float>(o.g);
   const float gain = static_cast<float>(o.deviation_gain);
@@ -559,6 +582,7 @@ PhaseCongruency FastPhaseCongruency::Compute(const cv::Mat& gray) const {
     const float width = static_cast<float>(i) / static_cast<float>(kWeightBins - 1);
     weight_table[static_cast<std::size_t>(i)] = 1.0f / (1.0f + std::exp((cut_off - width) * g));
   }
+  std::vector<float> negated_h2(static_cast<std::size_t>(cols));
   std::vector<const float*> f_rows(nscale);
   std::vector<const float*> h_rows(nscale);
   for (int r = 0; r < rows; ++r) {
@@ -573,7 +597,71 @@ PhaseCongruency FastPhaseCongruency::Compute(const cv::Mat& gray) const {
     }
     float* out = pc.ptr<float>(r);
     float* angle = orientation.ptr<float>(r);
-    for (int c = 0; c < cols; ++c) {
+    // The arc tangent of the whole row at once (vectorised); below the noise threshold the
+    // orientation is then set to 0.
+    for (int i = 0; i < cols; ++i) negated_h2[static_cast<std::size_t>(i)] = -sh2[i];
+    cv::hal::fastAtan32f(negated_h2.data(), sh1, angle, cols, /*angleInDegrees=*/true);
+    int c = 0;
+#if CV_SIMD
+    // phasecong3's measure on whole vectors: the scalar loop's operations in its order, so the
+    // values are the same; the table and the arc tangent stay per lane.
+    if (o.measure == FastPhaseCongruencyOptions::Measure::kEnergyDeviation) {
+      constexpr int kLanes = cv::v_float32::nlanes;
+      const cv::v_float32 v_t = cv::vx_setall_f32(t);
+      const cv::v_float32 v_eps = cv::vx_setall_f32(eps);
+      const cv::v_float32 v_zero = cv::vx_setzero_f32();
+      const cv::v_float32 v_one = cv::vx_setall_f32(1.0f);
+      const cv::v_float32 v_weight_scale = cv::vx_setall_f32(weight_scale);
+      const cv::v_float32 v_last_bin = cv::vx_setall_f32(static_cast<float>(kWeightBins - 1));
+      const cv::v_float32 v_half = cv::vx_setall_f32(0.5f);
+      const cv::v_float32 v_pi = cv::vx_setall_f32(static_cast<float>(kPi));
+      const cv::v_float32 v_to_radians = cv::vx_setall_f32(static_cast<float>(kPi) / 180.0f);
+      alignas(64) int bins[kLanes];
+      alignas(64) float weights[kLanes];
+      for (; c + kLanes <= cols; c += kLanes) {
+        const cv::v_float32 sfv = cv::vx_load(sf + c);
+        const cv::v_float32 s1 = cv::vx_load(sh1 + c);
+        const cv::v_float32 s2 = cv::vx_load(sh2 + c);
+        const cv::v_float32 energy = cv::v_sqrt(sfv * sfv + s1 * s1 + s2 * s2);
+        const cv::v_float32 above = energy > v_t;
+        if (cv::v_signmask(above) == 0) {
+          cv::v_store(out + c, v_zero);
+          cv::v_store(angle + c, v_zero);
+          continue;
+        }
+        const cv::v_float32 sav = cv::vx_load(sa + c);
+        const cv::v_float32 width = (sav / (cv::vx_load(ma + c) + v_eps) - v_one) * v_weight_scale;
+        cv::v_store(bins,
+                    cv::v_trunc(cv::v_min(cv::v_max(width, v_zero), v_one) * v_last_bin + v_half));
+        for (int lane = 0; lane < kLanes; ++lane) {
+          weights[lane] = weight_table[static_cast<std::size_t>(bins[lane])];
+        }
+        const cv::v_float32 inv = v_one / (energy + v_eps);
+        const cv::v_float32 mf = sfv * inv;
+        const cv::v_float32 m1 = s1 * inv;
+        const cv::v_float32 m2 = s2 * inv;
+        cv::v_float32 sum = v_zero;
+        for (std::size_t s = 0; s < nscale; ++s) {
+          const cv::v_float32 f = cv::vx_load(f_rows[s] + c);
+          cv::v_float32 h1;
+          cv::v_float32 h2;
+          cv::v_load_deinterleave(h_rows[s] + 2 * c, h1, h2);
+          const cv::v_float32 along = f * mf + h1 * m1 + h2 * m2;
+          const cv::v_float32 an2 = f * f + h1 * h1 + h2 * h2;
+          sum = sum + (along - cv::v_sqrt(cv::v_max(an2 - along * along, v_zero)));
+        }
+        const cv::v_float32 value =
+            cv::vx_load(weights) * cv::v_max(sum - v_t, v_zero) / (sav + v_eps);
+        cv::v_store(out + c,
+                    cv::v_select(above, cv::v_min(cv::v_max(value, v_zero), v_one), v_zero));
+        cv::v_float32 normal = cv::vx_load(angle + c) * v_to_radians;
+        normal = cv::v_select(normal >= v_pi, normal - v_pi, normal);
+        normal = cv::v_select(normal >= v_pi, v_zero, normal);
+        cv::v_store(angle + c, cv::v_select(above, normal, v_zero));
+      }
+    }
+#endif
+    for (; c < cols; ++c) {
       const float energy = std::sqrt(sf[c] * sf[c] + sh1[c] * sh1[c] + sh2[c] * sh2[c]);
       // Both measures are 0 at or below the noise threshold (the deviation sum never exceeds
       // the energy), which is most of a frame: skip the transcendental work there.
@@ -609,23 +697,9 @@ PhaseCongruency FastPhaseCongruency::Compute(const cv::Mat& gray) const {
         value = weight * std::max(sum - t, 0.0f) / (sa[c] + eps);
       }
       out[c] = std::clamp(value, 0.0f, 1.0f);
-      // cv::fastAtan2 (about 0.3 degree error) is ample for NMS, which works in whole degrees.
-      float a = cv::fastAtan2(-sh2[c], sh1[c]) * (pi / 180.0f);
-      if (a >= pi) a -= pi;
-      if (a >= pi) a = 0.0f;
-      angle[c] = a;
+      angle[c] = NormalFromDegrees(angle[c]);
     }
   }
-
-  PhaseCongruency result;
-  if (o.downscale > 1) {
-    cv::resize(pc, result.max_moment, full.size(), 0, 0, cv::INTER_LINEAR);
-    cv::resize(orientation, result.orientation, full.size(), 0, 0, cv::INTER_NEAREST);
-  } else {
-    result.max_moment = pc;
-    result.orientation = orientation;
-  }
-  return result;
 }
 
 }  // namespace noctua::edges

@@ -89,10 +89,18 @@ class FastPhaseCongruency {
   // with downscale the input must be at least downscale * kMinPhaseCongruencySize on each side.
   PhaseCongruency Compute(const cv::Mat& gray) const;
 
+  // The same at the working size (the input's size divided by downscale, rounded down), before
+  // it is brought back to full size: what an edge map at that size needs, without the cost of
+  // interpolating PC and orientation to every full-size pixel.
+  PhaseCongruency ComputeAtWorkingSize(const cv::Mat& gray) const;
+
   const FastPhaseCongruencyOptions& options() const { return options_; }
 
  private:
   struct FilterCache;
+  // Writes PC and orientation at the working size into the given matrices (allocated as needed).
+  void ComputeInto(const cv::Mat& gray, cv::Mat& pc, cv::Mat& orientation) const;
+
   FastPhaseCongruencyOptions options_;
   std::unique_ptr<FilterCache> cache_;
 };
