@@ -122,6 +122,43 @@ TEST(DetectGridFast, FallbackAddsWeakCornersOnlyWhereNeeded) {
   EXPECT_TRUE(DetectGridFast(cv::Mat(20, 20, CV_8UC1, cv::Scalar(0)), 0, options).empty());
 }
 
+// The intensity-centroid angle by its definition: moments over the disc u^2 + v^2 <= r^2 + r.
+float ReferenceAngle(const cv::Mat& image, cv::Point center) {
+  double m10 = 0.0;
+  double m01 = 0.0;
+  for (int v = -kHalfPatchSize; v <= kHalfPatchSize; ++v) {
+    for (int u = -kHalfPatchSize; u <= kHalfPatchSize; ++u) {
+      if (u * u + v * v > kHalfPatchSize * kHalfPatchSize + kHalfPatchSize) continue;
+      const double value = image.at<uchar>(center.y + v, center.x + u);
+      m10 += u * value;
+      m01 += v * value;
+    }
+  }
+  return cv::fastAtan2(static_cast<float>(m01), static_cast<float>(m10));
+}
+
+TEST(ComputeOrientation, EqualsTheDefinitionOnARealFrameUpToItsBorders) {
+  const cv::Mat frame =
+      noctua::testing::ReadImageOrThrow(noctua::testing::Fr1RgbPaths(1)[0], cv::IMREAD_GRAYSCALE);
+  std::vector<cv::KeyPoint> points;
+  // Every 7th pixel, from the first position whose disc fits to the last one, so that points on
+  // the right edge take the path that may not read past the disc.
+  const int first = kHalfPatchSize;
+  for (int y = first; y < frame.rows - kHalfPatchSize; y += 7) {
+    for (int x = first; x < frame.cols - kHalfPatchSize; x += 7) {
+      points.emplace_back(cv::Point2f(static_cast<float>(x), static_cast<float>(y)), 31.0f);
+    }
+    points.emplace_back(
+        cv::Point2f(static_cast<float>(frame.cols - 1 - kHalfPatchSize), static_cast<float>(y)),
+        31.0f);
+  }
+  ComputeOrientation(frame, points);
+  for (const auto& point : points) {
+    const cv::Point center(cvRound(point.pt.x), cvRound(point.pt.y));
+    ASSERT_EQ(point.angle, ReferenceAngle(frame, center)) << "at " << center;
+  }
+}
+
 TEST(DistributeOverImage, KeepsTargetPointsSpreadOverTheImage) {
   std::vector<cv::KeyPoint> points;
   // A dense cluster in one corner and a sparse spread elsewhere.
