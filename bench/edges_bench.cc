@@ -43,9 +43,11 @@ void BM_OrbOpenCv(benchmark::State& state) {
   }
 }
 
-void BM_EdgeMap(benchmark::State& state, EdgeMethod method) {
+void BM_EdgeMap(benchmark::State& state, EdgeMethod method, bool full_size_nms) {
   noctua::edges::EdgeDetectorOptions options;
   options.method = method;
+  options.fast_full_size_nms = full_size_nms;
+  if (full_size_nms) options.fast_thresholds = {0.2, 0.3};  // the pair chosen for that map
   const noctua::edges::EdgeDetector detector(options);
   detector.Detect(Frames()[0]);  // filters and FFT plans are built once per size, not per frame
   std::size_t i = 0;
@@ -68,20 +70,24 @@ void BM_FastPcOnly(benchmark::State& state) {
 constexpr int kRepetitions = 7;
 
 BENCHMARK(BM_OrbOpenCv)->Unit(benchmark::kMillisecond)->Repetitions(kRepetitions)->MinTime(0.3);
-BENCHMARK_CAPTURE(BM_EdgeMap, pc_fast, EdgeMethod::kPhaseCongruencyFast)
+BENCHMARK_CAPTURE(BM_EdgeMap, pc_fast, EdgeMethod::kPhaseCongruencyFast, false)
+    ->Unit(benchmark::kMillisecond)
+    ->Repetitions(kRepetitions)
+    ->MinTime(0.3);
+BENCHMARK_CAPTURE(BM_EdgeMap, pc_fast_full_size_nms, EdgeMethod::kPhaseCongruencyFast, true)
     ->Unit(benchmark::kMillisecond)
     ->Repetitions(kRepetitions)
     ->MinTime(0.3);
 BENCHMARK(BM_FastPcOnly)->Unit(benchmark::kMillisecond)->Repetitions(kRepetitions)->MinTime(0.3);
-BENCHMARK_CAPTURE(BM_EdgeMap, pc_reference, EdgeMethod::kPhaseCongruency)
+BENCHMARK_CAPTURE(BM_EdgeMap, pc_reference, EdgeMethod::kPhaseCongruency, false)
     ->Unit(benchmark::kMillisecond)
     ->Repetitions(3)
     ->Iterations(5);
-BENCHMARK_CAPTURE(BM_EdgeMap, canny, EdgeMethod::kCanny)
+BENCHMARK_CAPTURE(BM_EdgeMap, canny, EdgeMethod::kCanny, false)
     ->Unit(benchmark::kMillisecond)
     ->Repetitions(kRepetitions)
     ->MinTime(0.2);
-BENCHMARK_CAPTURE(BM_EdgeMap, sobel, EdgeMethod::kSobel)
+BENCHMARK_CAPTURE(BM_EdgeMap, sobel, EdgeMethod::kSobel, false)
     ->Unit(benchmark::kMillisecond)
     ->Repetitions(kRepetitions)
     ->MinTime(0.2);

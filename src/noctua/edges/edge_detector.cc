@@ -61,7 +61,7 @@ cv::Mat EdgeDetector::Detect(const cv::Mat& image) const {
       return EdgeMapFromPhaseCongruency(ComputePhaseCongruency(gray, options_.reference),
                                         options_.reference_thresholds);
     case EdgeMethod::kPhaseCongruencyFast:
-      return EdgeMapFromPhaseCongruency(fast_->Compute(gray), options_.fast_thresholds);
+      return FastEdges(gray);
     case EdgeMethod::kCanny:
       return CannyEdges(gray, options_.classic);
     case EdgeMethod::kSobel:
@@ -72,6 +72,15 @@ cv::Mat EdgeDetector::Detect(const cv::Mat& image) const {
       return RobertsEdges(gray, options_.classic);
   }
   throw Error("invalid edge method value");
+}
+
+cv::Mat EdgeDetector::FastEdges(const cv::Mat& gray) const {
+  if (options_.fast_full_size_nms || options_.fast.downscale == 1) {
+    return EdgeMapFromPhaseCongruency(fast_->Compute(gray), options_.fast_thresholds);
+  }
+  const PhaseCongruency pc = fast_->ComputeAtWorkingSize(gray);
+  return EnlargeEdgeMap(EdgeMapFromPhaseCongruency(pc, options_.fast_thresholds), pc, gray.size(),
+                        options_.fast.downscale);
 }
 
 std::unique_ptr<EdgeDetector> CreateEdgeDetector(const EdgeDetectorOptions& options) {

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <numbers>
 #include <opencv2/imgproc.hpp>
+#include <string>
 #include <vector>
 
 #include "noctua/util/error.h"
@@ -171,6 +172,75 @@ cv::Mat EdgeMapFromPhaseCongruency(const PhaseCongruency& pc, const EdgeMapOptio
   }
   cv::threshold(state, state, 254, 255, cv::THRESH_BINARY);
   return state;
+}
+
+cv::Mat EnlargeEdgeMap(const cv::Mat& edges, const PhaseCongruency& pc, cv::Size full_size,
+                       int factor) {
+  const cv::Mat& strength = pc.max_moment;
+  const cv::Mat& orientation = pc.orientation;
+  if (edges.type() != CV_8U || strength.type() != CV_32F || orientation.type() != CV_32F ||
+      edges.size() != strength.size() || edges.size() != orientation.size()) {
+    throw Error("edge map enlargement: edges (CV_8U) and PC (CV_32F) must be of one size");
+  }
+  if (factor < 1 || full_size.width / factor != edges.cols ||
+      full_size.height / factor != edges.rows) {
+    throw Error("edge map enlargement: the reduced map is not the full size divided by " +
+                std::to_string(factor));
+  }
+  const NormalOffsets& offsets = Offsets();
+  const float to_bin = static_cast<float>(NormalOffsets::kBins / std::numbers::pi);
+  const auto scale = static_cast<float>(factor);
+  const int rows = edges.rows;
+  const int cols = edges.cols;
+  // Where each edge pixel lands in the full map; (-1, -1) for the others.
+  cv::Mat placed(edges.size(), CV_32SC2, cv::Scalar(-1, -1));
+  cv::Mat full = cv::Mat::zeros(full_size, CV_8U);
+  for (int r = 0; r < rows; ++r) {
+    const unsigned char* e = edges.ptr<unsigned char>(r);
+    for (int c = 0; c < cols; ++c) {
+      if (e[c] == 0) continue;
+      const auto x = static_cast<float>(c);
+      const auto y = static_cast<float>(r);
+      float dx = 0.0f;
+      float dy = 0.0f;
+      float shift = 0.0f;
+      // Border pixels lack a neighbour on one side and stay at their centre.
+      if (r > 0 && c > 0 && r + 1 < rows && c + 1 < cols) {
+        const int bin =
+            static_cast<int>(orientation.at<float>(r, c) * to_bin + 0.5f) % NormalOffsets::kBins;
+        dx = offsets.x[bin];
+        dy = offsets.y[bin];
+        const float ahead = Bilinear(strength, x + dx, y + dy);
+        const float behind = Bilinear(strength, x - dx, y - dy);
+        const float curvature = behind - 2.0f * strength.at<float>(r, c) + ahead;
+        if (curvature < 0.0f) shift = std::clamp(0.5f * (behind - ahead) / curvature, -0.5f, 0.5f);
+      }
+      const float full_x = (x + shift * dx + 0.5f) * scale - 0.5f;
+      const float full_y = (y + shift * dy + 0.5f) * scale - 0.5f;
+      placed.at<cv::Vec2i>(r, c) =
+          cv::Vec2i(std::clamp(static_cast<int>(std::lround(full_x)), 0, full_size.width - 1),
+                    std::clamp(static_cast<int>(std::lround(full_y)), 0, full_size.height - 1));
+    }
+  }
+  for (int r = 0; r < rows; ++r) {
+    for (int c = 0; c < cols; ++c) {
+      const cv::Vec2i from = placed.at<cv::Vec2i>(r, c);
+      if (from[0] < 0) continue;
+      full.at<unsigned char>(from[1], from[0]) = 255;
+      // Each pair of 8-neighbours once: right, and the three below.
+      constexpr int kForward[4][2] = {{0, 1}, {1, -1}, {1, 0}, {1, 1}};
+      for (const auto& [dr, dc] : kForward) {
+        const int rr = r + dr;
+        const int cc = c + dc;
+        if (rr >= rows || cc < 0 || cc >= cols) continue;
+        const cv::Vec2i to = placed.at<cv::Vec2i>(rr, cc);
+        if (to[0] < 0) continue;
+        cv::line(full, cv::Point(from[0], from[1]), cv::Point(to[0], to[1]), cv::Scalar(255), 1,
+                 cv::LINE_8);
+      }
+    }
+  }
+  return full;
 }
 
 }  // namespace noctua::edges

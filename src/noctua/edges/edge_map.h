@@ -33,6 +33,15 @@ cv::Mat HysteresisThreshold(const cv::Mat& strength, double low, double high);
 // the extractor's edge filter takes.
 cv::Mat EdgeMapFromPhaseCongruency(const PhaseCongruency& pc, const EdgeMapOptions& options);
 
+// Draws an edge map made on an image reduced `factor` times (INTER_AREA, so that reduced pixel c
+// covers full pixels [c * factor, (c + 1) * factor)) into a CV_8U map of `full_size`, keeping
+// lines one pixel wide: each edge pixel goes to its sub-pixel position along the normal (the
+// vertex of a parabola through the strengths at the pixel and one reduced pixel to either side,
+// at most half a reduced pixel away), and 8-neighbouring edge pixels are joined by 8-connected
+// lines. `pc` is what `edges` was made from. Throws noctua::Error when the sizes do not fit.
+cv::Mat EnlargeEdgeMap(const cv::Mat& edges, const PhaseCongruency& pc, cv::Size full_size,
+                       int factor);
+
 }  // namespace noctua::edges
 
 namespace noctua::edges {

@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <numbers>
+#include <opencv2/imgproc.hpp>
+#include <utility>
 
 #include "noctua/util/error.h"
 
@@ -82,6 +84,57 @@ TEST(EdgeMapFromPhaseCongruency, ThinsAndThresholds) {
   bad.high_threshold = 0.2;
   EXPECT_THROW(bad.Check(), Error);
   EXPECT_THROW(EdgeMapFromPhaseCongruency(pc, bad), Error);
+}
+
+// A vertical ridge peaking between columns: strength top - 0.1 |c - peak|.
+cv::Mat SubPixelRidge(float peak) {
+  cv::Mat strength(20, 30, CV_32F);
+  for (int r = 0; r < strength.rows; ++r) {
+    for (int c = 0; c < strength.cols; ++c) {
+      strength.at<float>(r, c) =
+          std::max(0.8f - 0.1f * std::abs(static_cast<float>(c) - peak), 0.0f);
+    }
+  }
+  return strength;
+}
+
+TEST(EnlargeEdgeMap, PlacesARidgeAtItsSubPixelPositionOnePixelWide) {
+  // Reduced column 12.3 is full column (12.3 + 0.5) * 2 - 0.5 = 25.1, and 11.7 is 23.9: the
+  // nearest full columns are 25 and 24, where a plain enlargement would mark both for either.
+  for (const auto& [peak, column] : {std::pair{12.3f, 25}, std::pair{11.7f, 24}}) {
+    PhaseCongruency pc;
+    pc.max_moment = SubPixelRidge(peak);
+    pc.orientation = cv::Mat(pc.max_moment.size(), CV_32F, cv::Scalar(0.0f));  // normal along x
+    const cv::Mat reduced = EdgeMapFromPhaseCongruency(pc, EdgeMapOptions{0.1, 0.2});
+    ASSERT_EQ(cv::countNonZero(reduced.col(12)), pc.max_moment.rows - 2);
+    const cv::Mat full = EnlargeEdgeMap(reduced, pc, cv::Size(60, 40), 2);
+    ASSERT_EQ(full.size(), cv::Size(60, 40));
+    // Reduced rows 1..18 land on full rows 3, 5, ..., 37, joined by the rows between.
+    for (int r = 0; r < full.rows; ++r) {
+      const bool on_line = r >= 3 && r <= 37;
+      EXPECT_EQ(cv::countNonZero(full.row(r)), on_line ? 1 : 0) << "row " << r;
+      if (on_line) {
+        EXPECT_EQ(full.at<unsigned char>(r, column), 255) << "row " << r;
+      }
+    }
+  }
+}
+
+TEST(EnlargeEdgeMap, KeepsADiagonalLineConnectedAndRejectsSizesThatDoNotFit) {
+  PhaseCongruency pc;
+  pc.max_moment = cv::Mat::zeros(24, 24, CV_32F);
+  for (int i = 0; i < 24; ++i) pc.max_moment.at<float>(i, i) = 0.9f;
+  pc.orientation =
+      cv::Mat(pc.max_moment.size(), CV_32F, cv::Scalar(static_cast<float>(std::numbers::pi / 4)));
+  const cv::Mat reduced = pc.max_moment > 0.5f;
+  const cv::Mat full = EnlargeEdgeMap(reduced, pc, cv::Size(49, 48), 2);  // 49 / 2 = 24 fits
+  cv::Mat labels;
+  EXPECT_EQ(cv::connectedComponents(full, labels, 8), 2);  // the background and one line
+  // One pixel per full row from the first placed row to the last: a thin line.
+  EXPECT_EQ(cv::countNonZero(full), full.rows - 1);
+  EXPECT_THROW(EnlargeEdgeMap(reduced, pc, cv::Size(52, 48), 2), Error);
+  EXPECT_THROW(EnlargeEdgeMap(reduced, pc, cv::Size(48, 48), 0), Error);
+  EXPECT_THROW(EnlargeEdgeMap(reduced(cv::Rect(0, 0, 20, 20)), pc, cv::Size(40, 40), 2), Error);
 }
 
 TEST(CompareEdgeMaps, KnownAnswers) {
