@@ -51,7 +51,7 @@ DarkRun EvaluateDarkFr1(double level, int frames, const fs::path& report_dir = {
 
 // Enhancement must give more correct matches than plain ORB in the dark. Measured
 // (docs/evaluation.md): at 15% (mean grey 23) over the first 80 frames, orb 7.2 correct matches
-// per pair at 10 px, clahe-orb 11.3, paper 10.8; over the whole 200 frames at 15% the three are
+// per pair at 10 px, clahe-orb 11.3, paper 11.4; over the whole 200 frames at 15% the three are
 // within noise of each other. At 8% (mean grey ~12) orb keeps ~2 per pair over the whole
 // sequence and clahe-orb and paper 4-5 times as many.
 TEST(EvaluateFeatures, EnhancedMethodsBeatOrbOnFr1DarkenedTo15Percent) {
