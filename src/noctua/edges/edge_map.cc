@@ -62,6 +62,13 @@ bool IsNormalMaximum(const cv::Mat& strength, const cv::Mat& orientation,
   return value >= Bilinear(strength, x - dx, y - dy);
 }
 
+// Marks the 8-connected line between two placed edge pixels. The pixels of cv::line (whose
+// iterator this is) without its per-call overhead, which is most of its cost for lines this short.
+void JoinWithLine(cv::Mat& map, const cv::Vec2i& from, const cv::Vec2i& to) {
+  cv::LineIterator line(map, cv::Point(from[0], from[1]), cv::Point(to[0], to[1]), 8, true);
+  for (int i = 0; i < line.count; ++i, ++line) **line = 255;
+}
+
 }  // namespace
 
 void EdgeMapOptions::Check() const {
@@ -192,52 +199,48 @@ cv::Mat EnlargeEdgeMap(const cv::Mat& edges, const PhaseCongruency& pc, cv::Size
   const auto scale = static_cast<float>(factor);
   const int rows = edges.rows;
   const int cols = edges.cols;
-  // Where each edge pixel lands in the full map; (-1, -1) for the others.
-  cv::Mat placed(edges.size(), CV_32SC2, cv::Scalar(-1, -1));
+  // Where each edge pixel lands in the full map, written (and read) at edge pixels only: a
+  // scratch matrix each thread reuses frame after frame.
+  thread_local cv::Mat placed;
+  placed.create(edges.size(), CV_32SC2);
+  std::vector<cv::Point> edge_pixels;
+  cv::findNonZero(edges, edge_pixels);
   cv::Mat full = cv::Mat::zeros(full_size, CV_8U);
-  for (int r = 0; r < rows; ++r) {
-    const unsigned char* e = edges.ptr<unsigned char>(r);
-    for (int c = 0; c < cols; ++c) {
-      if (e[c] == 0) continue;
-      const auto x = static_cast<float>(c);
-      const auto y = static_cast<float>(r);
-      float dx = 0.0f;
-      float dy = 0.0f;
-      float shift = 0.0f;
-      // Border pixels lack a neighbour on one side and stay at their centre.
-      if (r > 0 && c > 0 && r + 1 < rows && c + 1 < cols) {
-        const int bin =
-            static_cast<int>(orientation.at<float>(r, c) * to_bin + 0.5f) % NormalOffsets::kBins;
-        dx = offsets.x[bin];
-        dy = offsets.y[bin];
-        const float ahead = Bilinear(strength, x + dx, y + dy);
-        const float behind = Bilinear(strength, x - dx, y - dy);
-        const float curvature = behind - 2.0f * strength.at<float>(r, c) + ahead;
-        if (curvature < 0.0f) shift = std::clamp(0.5f * (behind - ahead) / curvature, -0.5f, 0.5f);
-      }
-      const float full_x = (x + shift * dx + 0.5f) * scale - 0.5f;
-      const float full_y = (y + shift * dy + 0.5f) * scale - 0.5f;
-      placed.at<cv::Vec2i>(r, c) =
-          cv::Vec2i(std::clamp(static_cast<int>(std::lround(full_x)), 0, full_size.width - 1),
-                    std::clamp(static_cast<int>(std::lround(full_y)), 0, full_size.height - 1));
+  for (const cv::Point& pixel : edge_pixels) {
+    const int r = pixel.y;
+    const int c = pixel.x;
+    const auto x = static_cast<float>(c);
+    const auto y = static_cast<float>(r);
+    float dx = 0.0f;
+    float dy = 0.0f;
+    float shift = 0.0f;
+    // Border pixels lack a neighbour on one side and stay at their centre.
+    if (r > 0 && c > 0 && r + 1 < rows && c + 1 < cols) {
+      const int bin =
+          static_cast<int>(orientation.at<float>(r, c) * to_bin + 0.5f) % NormalOffsets::kBins;
+      dx = offsets.x[bin];
+      dy = offsets.y[bin];
+      const float ahead = Bilinear(strength, x + dx, y + dy);
+      const float behind = Bilinear(strength, x - dx, y - dy);
+      const float curvature = behind - 2.0f * strength.at<float>(r, c) + ahead;
+      if (curvature < 0.0f) shift = std::clamp(0.5f * (behind - ahead) / curvature, -0.5f, 0.5f);
     }
+    const float full_x = (x + shift * dx + 0.5f) * scale - 0.5f;
+    const float full_y = (y + shift * dy + 0.5f) * scale - 0.5f;
+    placed.at<cv::Vec2i>(pixel) =
+        cv::Vec2i(std::clamp(static_cast<int>(std::lround(full_x)), 0, full_size.width - 1),
+                  std::clamp(static_cast<int>(std::lround(full_y)), 0, full_size.height - 1));
   }
-  for (int r = 0; r < rows; ++r) {
-    for (int c = 0; c < cols; ++c) {
-      const cv::Vec2i from = placed.at<cv::Vec2i>(r, c);
-      if (from[0] < 0) continue;
-      full.at<unsigned char>(from[1], from[0]) = 255;
-      // Each pair of 8-neighbours once: right, and the three below.
-      constexpr int kForward[4][2] = {{0, 1}, {1, -1}, {1, 0}, {1, 1}};
-      for (const auto& [dr, dc] : kForward) {
-        const int rr = r + dr;
-        const int cc = c + dc;
-        if (rr >= rows || cc < 0 || cc >= cols) continue;
-        const cv::Vec2i to = placed.at<cv::Vec2i>(rr, cc);
-        if (to[0] < 0) continue;
-        cv::line(full, cv::Point(from[0], from[1]), cv::Point(to[0], to[1]), cv::Scalar(255), 1,
-                 cv::LINE_8);
-      }
+  for (const cv::Point& pixel : edge_pixels) {
+    const cv::Vec2i from = placed.at<cv::Vec2i>(pixel);
+    full.at<unsigned char>(from[1], from[0]) = 255;
+    // Each pair of 8-neighbours once: right, and the three below.
+    constexpr int kForward[4][2] = {{0, 1}, {1, -1}, {1, 0}, {1, 1}};
+    for (const auto& [dr, dc] : kForward) {
+      const int rr = pixel.y + dr;
+      const int cc = pixel.x + dc;
+      if (rr >= rows || cc < 0 || cc >= cols || edges.at<unsigned char>(rr, cc) == 0) continue;
+      JoinWithLine(full, from, placed.at<cv::Vec2i>(rr, cc));
     }
   }
   return full;
