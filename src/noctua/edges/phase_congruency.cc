@@ -604,7 +604,7 @@ void FastPhaseCongruency::ComputeInto(const cv::Mat& gray, cv::Mat& pc,
     int c = 0;
 #if CV_SIMD
     // phasecong3's measure on whole vectors: the scalar loop's operations in its order, so the
-    // values are the same; the table and the arc tangent stay per lane.
+    // values are the same; only the weight table is read lane by lane.
     if (o.measure == FastPhaseCongruencyOptions::Measure::kEnergyDeviation) {
       constexpr int kLanes = cv::v_float32::nlanes;
       const cv::v_float32 v_t = cv::vx_setall_f32(t);
