@@ -46,20 +46,24 @@ const NormalOffsets& Offsets() {
   return offsets;
 }
 
-// Whether interior pixel (r, c) is a maximum along its normal: strictly above the neighbour ahead,
-// at least the one behind (so a symmetric two-pixel ridge keeps one pixel).
-bool IsNormalMaximum(const cv::Mat& strength, const cv::Mat& orientation,
-                     const NormalOffsets& offsets, int r, int c) {
+// The unit normal at pixel (r, c), its orientation rounded to a whole degree.
+cv::Point2f NormalAt(const cv::Mat& orientation, int r, int c) {
+  const NormalOffsets& offsets = Offsets();
   const float to_bin = static_cast<float>(NormalOffsets::kBins / std::numbers::pi);
-  const float value = strength.at<float>(r, c);
   const int bin =
       static_cast<int>(orientation.at<float>(r, c) * to_bin + 0.5f) % NormalOffsets::kBins;
-  const float dx = offsets.x[bin];
-  const float dy = offsets.y[bin];
+  return {offsets.x[bin], offsets.y[bin]};
+}
+
+// Whether interior pixel (r, c) is a maximum along its normal: strictly above the neighbour ahead,
+// at least the one behind (so a symmetric two-pixel ridge keeps one pixel).
+bool IsNormalMaximum(const cv::Mat& strength, const cv::Mat& orientation, int r, int c) {
+  const float value = strength.at<float>(r, c);
+  const cv::Point2f normal = NormalAt(orientation, r, c);
   const float x = static_cast<float>(c);
   const float y = static_cast<float>(r);
-  if (!(value > Bilinear(strength, x + dx, y + dy))) return false;
-  return value >= Bilinear(strength, x - dx, y - dy);
+  if (!(value > Bilinear(strength, x + normal.x, y + normal.y))) return false;
+  return value >= Bilinear(strength, x - normal.x, y - normal.y);
 }
 
 // Marks the 8-connected line between two placed edge pixels. The pixels of cv::line (whose
@@ -83,7 +87,6 @@ cv::Mat NonMaximumSuppression(const cv::Mat& strength, const cv::Mat& orientatio
       strength.size() != orientation.size()) {
     throw Error("non-maximum suppression: strength and orientation must be CV_32F of one size");
   }
-  const NormalOffsets& offsets = Offsets();
   const float floor_value = std::max(static_cast<float>(min_strength), 1e-7f);
   cv::Mat thinned = cv::Mat::zeros(strength.size(), CV_32F);
   // Neighbours lie within one pixel, so the loop stays one pixel inside the image and the
@@ -92,7 +95,7 @@ cv::Mat NonMaximumSuppression(const cv::Mat& strength, const cv::Mat& orientatio
     const float* s = strength.ptr<float>(r);
     float* out = thinned.ptr<float>(r);
     for (int c = 1; c + 1 < strength.cols; ++c) {
-      if (s[c] >= floor_value && IsNormalMaximum(strength, orientation, offsets, r, c)) {
+      if (s[c] >= floor_value && IsNormalMaximum(strength, orientation, r, c)) {
         out[c] = s[c];
       }
     }
@@ -150,7 +153,6 @@ cv::Mat EdgeMapFromPhaseCongruency(const PhaseCongruency& pc, const EdgeMapOptio
   // on the whole frame. state: 0 unvisited, 1 not an edge, 255 edge.
   const float weak = std::max(static_cast<float>(options.low_threshold), 1e-7f);
   const float strong = std::max(static_cast<float>(options.high_threshold), weak);
-  const NormalOffsets& offsets = Offsets();
   const int rows = strength.rows;
   const int cols = strength.cols;
   cv::Mat state = cv::Mat::zeros(strength.size(), CV_8U);
@@ -159,7 +161,7 @@ cv::Mat EdgeMapFromPhaseCongruency(const PhaseCongruency& pc, const EdgeMapOptio
     unsigned char& s = state.at<unsigned char>(r, c);
     if (s != 0) return;
     const bool edge =
-        strength.at<float>(r, c) >= weak && IsNormalMaximum(strength, orientation, offsets, r, c);
+        strength.at<float>(r, c) >= weak && IsNormalMaximum(strength, orientation, r, c);
     s = edge ? 255 : 1;
     if (edge) stack.emplace_back(c, r);
   };
@@ -194,8 +196,6 @@ cv::Mat EnlargeEdgeMap(const cv::Mat& edges, const PhaseCongruency& pc, cv::Size
     throw Error("edge map enlargement: the reduced map is not the full size divided by " +
                 std::to_string(factor));
   }
-  const NormalOffsets& offsets = Offsets();
-  const float to_bin = static_cast<float>(NormalOffsets::kBins / std::numbers::pi);
   const auto scale = static_cast<float>(factor);
   const int rows = edges.rows;
   const int cols = edges.cols;
@@ -211,22 +211,19 @@ cv::Mat EnlargeEdgeMap(const cv::Mat& edges, const PhaseCongruency& pc, cv::Size
     const int c = pixel.x;
     const auto x = static_cast<float>(c);
     const auto y = static_cast<float>(r);
-    float dx = 0.0f;
-    float dy = 0.0f;
-    float shift = 0.0f;
+    cv::Point2f shift(0.0f, 0.0f);  // towards the peak along the normal
     // Border pixels lack a neighbour on one side and stay at their centre.
     if (r > 0 && c > 0 && r + 1 < rows && c + 1 < cols) {
-      const int bin =
-          static_cast<int>(orientation.at<float>(r, c) * to_bin + 0.5f) % NormalOffsets::kBins;
-      dx = offsets.x[bin];
-      dy = offsets.y[bin];
-      const float ahead = Bilinear(strength, x + dx, y + dy);
-      const float behind = Bilinear(strength, x - dx, y - dy);
+      const cv::Point2f normal = NormalAt(orientation, r, c);
+      const float ahead = Bilinear(strength, x + normal.x, y + normal.y);
+      const float behind = Bilinear(strength, x - normal.x, y - normal.y);
       const float curvature = behind - 2.0f * strength.at<float>(r, c) + ahead;
-      if (curvature < 0.0f) shift = std::clamp(0.5f * (behind - ahead) / curvature, -0.5f, 0.5f);
+      if (curvature < 0.0f) {
+        shift = normal * std::clamp(0.5f * (behind - ahead) / curvature, -0.5f, 0.5f);
+      }
     }
-    const float full_x = (x + shift * dx + 0.5f) * scale - 0.5f;
-    const float full_y = (y + shift * dy + 0.5f) * scale - 0.5f;
+    const float full_x = (x + shift.x + 0.5f) * scale - 0.5f;
+    const float full_y = (y + shift.y + 0.5f) * scale - 0.5f;
     placed.at<cv::Vec2i>(pixel) =
         cv::Vec2i(std::clamp(static_cast<int>(std::lround(full_x)), 0, full_size.width - 1),
                   std::clamp(static_cast<int>(std::lround(full_y)), 0, full_size.height - 1));
