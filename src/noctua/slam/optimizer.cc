@@ -20,7 +20,9 @@ Intrinsics IntrinsicsOf(const FrameFeatures& features, double bf) {
 
 Observation ObservationOf(const FrameFeatures& features, int i, const ScalePyramid& pyramid) {
   const Eigen::Vector2d& pixel = features.undistorted(i);
-  return {pixel.x(), pixel.y(), features.right_u(i),
+  // right_u = u - bf / depth, so u - right_u is the virtual disparity bf / depth.
+  const double disparity = features.depth(i) > 0.0 ? pixel.x() - features.right_u(i) : 0.0;
+  return {pixel.x(), pixel.y(), disparity,
           std::sqrt(pyramid.inverse_sigma2[static_cast<std::size_t>(features.octave(i))]),
           features.depth(i) > 0.0};
 }

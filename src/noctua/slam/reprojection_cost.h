@@ -15,15 +15,23 @@ struct Intrinsics {
   double fx, fy, cx, cy, bf;
 };
 
-// The observation of a point: undistorted pixel, and the virtual right coordinate when the
-// keypoint has depth (a negative right coordinate: monocular residual).
+// The observation of a point: undistorted pixel and, when the keypoint has depth, its virtual
+// disparity bf / depth.
 struct Observation {
-  double u, v, right_u, inverse_sigma;
+  double u, v, disparity, inverse_sigma;
   bool stereo;  // the keypoint has depth: three residuals
 };
 
-// Reprojection residuals of an observation at camera point p, weighted by the keypoint's level:
-// pixel u and v and, for a keypoint with depth, the virtual right coordinate u - bf / z.
+// Residuals of an observation at camera point p, weighted by the keypoint's level: pixel u and v
+// and, for a keypoint with depth, the virtual disparity bf / z.
+//
+// ORB-SLAM's RGB-D mode uses the virtual right coordinate u - bf / z as the third residual, with
+// the same weight as u. For a stereo camera that is right: the right coordinate is measured in a
+// second image, independently of u. A depth sensor measures u (the colour image) and the depth
+// instead, so the right coordinate's error is u's error minus the disparity's, and that residual
+// counts the error in u twice and ties it to depth. The disparity residual keeps the two
+// measurements independent. On tum_fr1_rpy_200 (orb, clahe-orb and paper at normal, 30 % and
+// 15 % light: nine runs) the mean ATE went from 0.051 to 0.031 m (docs/slam.md).
 template <typename T>
 void Residuals(const Intrinsics& k, const Observation& o, const Eigen::Matrix<T, 3, 1>& p, T* r,
                bool stereo) {
@@ -32,7 +40,7 @@ void Residuals(const Intrinsics& k, const Observation& o, const Eigen::Matrix<T,
   const T v = T(k.fy) * p.y() * inverse_z + T(k.cy);
   r[0] = (u - T(o.u)) * T(o.inverse_sigma);
   r[1] = (v - T(o.v)) * T(o.inverse_sigma);
-  if (stereo) r[2] = (u - T(k.bf) * inverse_z - T(o.right_u)) * T(o.inverse_sigma);
+  if (stereo) r[2] = (T(k.bf) * inverse_z - T(o.disparity)) * T(o.inverse_sigma);
 }
 
 // Rotation as an Eigen quaternion updated on the left as by Ceres' EigenQuaternionManifold,
@@ -81,10 +89,7 @@ void ProjectWithJacobians(const Intrinsics& k, const Observation& o, const Eigen
   Eigen::Matrix<double, kResiduals, 3> d_p;
   d_p.row(0) << k.fx * inverse_z, 0.0, -k.fx * p.x() * inverse_z2;
   d_p.row(1) << 0.0, k.fy * inverse_z, -k.fy * p.y() * inverse_z2;
-  if constexpr (kResiduals == 3) {
-    d_p.row(2) = d_p.row(0);
-    d_p(2, 2) += k.bf * inverse_z2;
-  }
+  if constexpr (kResiduals == 3) d_p.row(2) << 0.0, 0.0, -k.bf * inverse_z2;
   d_p *= o.inverse_sigma;
   if (j_rotation != nullptr) {
     // p = exp(2δ) R x + t (LeftQuaternionManifold's δ is half the angle): ∂p/∂δ = -2 [R x]×.

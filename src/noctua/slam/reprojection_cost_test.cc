@@ -36,7 +36,8 @@ void ExpectJacobiansMatchAutoDiff(std::mt19937& random) {
   const Eigen::Vector3d x = q.inverse() * (in_camera - t);
   const Observation o{kIntrinsics.fx * in_camera.x() / in_camera.z() + kIntrinsics.cx + 3.0,
                       kIntrinsics.fy * in_camera.y() / in_camera.z() + kIntrinsics.cy - 2.0,
-                      kResiduals == 3 ? 300.0 : -1.0, 0.8, kResiduals == 3};
+                      kResiduals == 3 ? kIntrinsics.bf / in_camera.z() + 1.5 : 0.0, 0.8,
+                      kResiduals == 3};
   const double rotation[4] = {q.x(), q.y(), q.z(), q.w()};
   const double* parameters[3] = {rotation, t.data(), x.data()};
 
@@ -83,6 +84,28 @@ void ExpectJacobiansMatchAutoDiff(std::mt19937& random) {
   EXPECT_TRUE(pose_translation.isApprox(j_translation, 1e-12));
 }
 
+// The depth residual is the disparity's error alone: an error in u shows in the first residual
+// only, and an error in depth in the third only, both weighted by the level's inverse sigma.
+TEST(ReprojectionCost, DepthResidualIsIndependentOfThePixelError) {
+  const Eigen::Vector3d in_camera(0.3, -0.2, 2.0);
+  const double u = kIntrinsics.fx * in_camera.x() / in_camera.z() + kIntrinsics.cx;
+  const double v = kIntrinsics.fy * in_camera.y() / in_camera.z() + kIntrinsics.cy;
+  const double inverse_sigma = 1.0 / 1.44;  // level 2 of a 1.2 pyramid
+  double r[3];
+  // u observed 3 px off, depth exact.
+  Residuals<double>(kIntrinsics, {u + 3.0, v, kIntrinsics.bf / 2.0, inverse_sigma, true}, in_camera,
+                    r, true);
+  EXPECT_NEAR(r[0], -3.0 * inverse_sigma, 1e-12);
+  EXPECT_NEAR(r[1], 0.0, 1e-12);
+  EXPECT_NEAR(r[2], 0.0, 1e-12);
+  // Pixel exact, depth measured 2.5 m instead of 2 m: disparity 16 px instead of 20.
+  Residuals<double>(kIntrinsics, {u, v, kIntrinsics.bf / 2.5, inverse_sigma, true}, in_camera, r,
+                    true);
+  EXPECT_NEAR(r[0], 0.0, 1e-12);
+  EXPECT_NEAR(r[1], 0.0, 1e-12);
+  EXPECT_NEAR(r[2], (20.0 - 16.0) * inverse_sigma, 1e-12);
+}
+
 TEST(ReprojectionCost, AnalyticJacobiansEqualAutomaticDifferentiation) {
   std::mt19937 random(7);
   for (int trial = 0; trial < 20; ++trial) {
@@ -106,7 +129,7 @@ TEST(ReprojectionCost, RecoversAKnownPose) {
     const double u = kIntrinsics.fx * in_camera.x() / in_camera.z() + kIntrinsics.cx;
     const double v = kIntrinsics.fy * in_camera.y() / in_camera.z() + kIntrinsics.cy;
     points.push_back(q_true.inverse() * (in_camera - t_true));
-    observations.push_back({u, v, u - kIntrinsics.bf / in_camera.z(), 1.0, i % 2 == 0});
+    observations.push_back({u, v, kIntrinsics.bf / in_camera.z(), 1.0, i % 2 == 0});
   }
   const Eigen::Quaterniond start =
       Eigen::Quaterniond(Eigen::AngleAxisd(0.2, Eigen::Vector3d::UnitY())) * q_true;
