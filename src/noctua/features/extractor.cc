@@ -111,7 +111,7 @@ Extraction Extractor::ExtractWithMask(const cv::Mat& image, const cv::Mat& featu
   // how many threads ran.
   struct LevelWork {
     std::vector<cv::KeyPoint> points;
-    std::array<int, 5> counts{};  // detected, after mask, dynamic, edge, nms
+    std::array<int, 6> counts{};  // detected, after mask, dynamic, edge, nms, edge fill
     std::map<std::string, double> stage_ms;
     cv::Mat descriptors;
   };
@@ -174,6 +174,7 @@ Extraction Extractor::ExtractWithMask(const cv::Mat& image, const cv::Mat& featu
     stats.stages_skipped.push_back("edge-filter (no edge map or edge detector)");
   } else {
     stats.stages_ran.push_back("edge-filter");
+    if (options_.edge_filter.fill_to_quota) stats.stages_ran.push_back("edge-fill");
   }
   if (options_.nms_filter.enabled) {
     stats.stages_ran.push_back("nms-filter");
@@ -190,9 +191,13 @@ Extraction Extractor::ExtractWithMask(const cv::Mat& image, const cv::Mat& featu
             [&] { FilterByMask(points, scale, dynamic_mask, /*drop_where_set=*/true); });
     }
     level.counts[2] = static_cast<int>(points.size());
+    const bool fill = edge_on && options_.edge_filter.fill_to_quota;
+    std::vector<cv::KeyPoint> edge_dropped;
     if (edge_on) {
-      timed(level, "edge-filter",
-            [&] { FilterByEdgeDistance(points, scale, edge_map, options_.edge_filter.radius_px); });
+      timed(level, "edge-filter", [&] {
+        FilterByEdgeDistance(points, scale, edge_map, options_.edge_filter.radius_px,
+                             fill ? &edge_dropped : nullptr);
+      });
     }
     level.counts[3] = static_cast<int>(points.size());
     if (options_.nms_filter.enabled) {
@@ -207,7 +212,17 @@ Extraction Extractor::ExtractWithMask(const cv::Mat& image, const cv::Mat& featu
                               static_cast<float>(kEdgeThreshold),
                               static_cast<float>(level_image.cols - 2 * kEdgeThreshold),
                               static_cast<float>(level_image.rows - 2 * kEdgeThreshold));
-      points = DistributeOverImage(points, bounds, wanted[static_cast<std::size_t>(l)]);
+      const int quota = wanted[static_cast<std::size_t>(l)];
+      points = DistributeOverImage(points, bounds, quota);
+      const int missing = quota - static_cast<int>(points.size());
+      if (fill && missing > 0) {
+        const int window = options_.nms_filter.enabled ? options_.nms_filter.window : 1;
+        const std::vector<cv::KeyPoint> extra = DistributeOverImage(
+            FillCandidates(std::move(edge_dropped), points, level_image.size(), window), bounds,
+            missing);
+        level.counts[5] = static_cast<int>(extra.size());
+        points.insert(points.end(), extra.begin(), extra.end());
+      }
     });
     timed(level, "orientation", [&] {
       ComputeOrientation(level_image, points);
@@ -233,6 +248,7 @@ Extraction Extractor::ExtractWithMask(const cv::Mat& image, const cv::Mat& featu
     stats.after_dynamic += level.counts[2];
     stats.after_edge += level.counts[3];
     stats.after_nms += level.counts[4];
+    stats.edge_fill += level.counts[5];
     for (const auto& [name, ms] : level.stage_ms) stats.stage_ms[name] += ms;
     out.keypoints.insert(out.keypoints.end(), level.points.begin(), level.points.end());
     if (!level.descriptors.empty()) descriptor_rows.push_back(level.descriptors);

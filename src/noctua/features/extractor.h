@@ -31,6 +31,9 @@ struct ExtractionStats {
   int after_edge = 0;     // after filter (b)
   int after_nms = 0;      // after filter (c)
   int final_count = 0;    // after distribution over the image to num_features
+  // Of final_count, points the edge filter had dropped, put back on starved levels
+  // (EdgeFilterOptions::fill_to_quota).
+  int edge_fill = 0;
   std::vector<std::string> stages_ran;
   std::vector<std::string> stages_skipped;  // "edge-filter (no edge map source)", ...
   std::map<std::string, double> stage_ms;

@@ -28,9 +28,9 @@ ExtractorOptions ExtractorOptionsFromYaml(const YAML::Node& root, const std::str
                   ": 'extractor' must be a map of settings");
     }
     static const std::set<std::string> kKnown = {
-        "enhancement", "clahe_clip_limit", "clahe_tiles_x", "clahe_tiles_y",
-        "cell_size",   "dynamic_filter",   "edge_filter",   "edge_radius_px",
-        "nms_filter",  "nms_window",       "descriptors",   "parallel"};
+        "enhancement",    "clahe_clip_limit", "clahe_tiles_x",  "clahe_tiles_y", "cell_size",
+        "dynamic_filter", "edge_filter",      "edge_radius_px", "edge_fill",     "nms_filter",
+        "nms_window",     "descriptors",      "parallel"};
     for (const auto& entry : section) {
       const auto key = entry.first.as<std::string>();
       if (!kKnown.contains(key)) {
@@ -53,6 +53,7 @@ ExtractorOptions ExtractorOptionsFromYaml(const YAML::Node& root, const std::str
     ReadSetting(section, "dynamic_filter", source, options.dynamic_filter.enabled);
     ReadSetting(section, "edge_filter", source, options.edge_filter.enabled);
     ReadSetting(section, "edge_radius_px", source, options.edge_filter.radius_px);
+    ReadSetting(section, "edge_fill", source, options.edge_filter.fill_to_quota);
     ReadSetting(section, "nms_filter", source, options.nms_filter.enabled);
     ReadSetting(section, "nms_window", source, options.nms_filter.window);
     ReadSetting(section, "descriptors", source, options.compute_descriptors);

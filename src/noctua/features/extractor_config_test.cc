@@ -49,12 +49,15 @@ TEST_F(ExtractorConfigTest, ReadsTheExtractorSection) {
                           "  clahe_clip_limit: 2.5\n"
                           "  edge_filter: false\n"
                           "  edge_radius_px: 3\n"
+                          "  edge_fill: true\n"
                           "  nms_window: 5\n");
   const ExtractorOptions options = LoadExtractorOptions(path);
   EXPECT_EQ(options.enhancement.method, image::EnhancementMethod::kHistogramEqualization);
   EXPECT_DOUBLE_EQ(options.enhancement.clahe_clip_limit, 2.5);
   EXPECT_FALSE(options.edge_filter.enabled);
   EXPECT_DOUBLE_EQ(options.edge_filter.radius_px, 3.0);
+  EXPECT_TRUE(options.edge_filter.fill_to_quota);
+  EXPECT_FALSE(ExtractorOptions().edge_filter.fill_to_quota);
   EXPECT_EQ(options.nms_filter.window, 5);
 }
 

@@ -27,9 +27,17 @@ struct DynamicFilterOptions {
 // Filter (b): only points within `radius_px` of an edge pixel survive. The radius is in pixels
 // of the point's own pyramid level, so coarse levels (whose points are localised less finely)
 // get a proportionally wider band in the full-resolution edge map.
+//
+// fill_to_quota (not in the paper): when the filters leave a pyramid level fewer points than its
+// share of num_features, the strongest of the points the edge filter dropped, spread over the
+// level like the others, make up the difference. Points on edges always come first, so the fill
+// changes nothing on a frame with enough of them; in heavy noise (15% light) PC finds few edges
+// and the strict filter starves the tracker (docs/slam.md). Off by default: the paper's method;
+// the SLAM presets in config/ turn it on.
 struct EdgeFilterOptions {
   bool enabled = true;
   double radius_px = 2.0;
+  bool fill_to_quota = false;
   void Check() const;
 };
 

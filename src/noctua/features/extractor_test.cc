@@ -210,6 +210,57 @@ TEST(Extractor, FiltersRemovePointsInTheDynamicMaskAndFarFromEdges) {
   EXPECT_THAT(stats.stages_ran, ::testing::Contains("edge-filter"));
 }
 
+// The fill is the strict filter's output plus points it dropped: where a sparse edge map leaves
+// the levels short, it adds points up to what the frame offers without the edge filter, and keeps
+// every strict point; with edges everywhere it changes nothing.
+TEST(Extractor, EdgeFillTopsUpStarvedLevelsAndKeepsTheStrictPoints) {
+  const cv::Mat frame =
+      noctua::testing::ReadImageOrThrow(noctua::testing::Fr1RgbPaths(1)[0], cv::IMREAD_COLOR);
+  ExtractorOptions strict_options;
+  strict_options.dynamic_filter.enabled = false;
+  ExtractorOptions fill_options = strict_options;
+  fill_options.edge_filter.fill_to_quota = true;
+  ExtractorOptions unfiltered_options = strict_options;
+  unfiltered_options.edge_filter.enabled = false;
+  Extractor strict(strict_options);
+  Extractor fill(fill_options);
+
+  // Lines 60 px apart leave most corners of the frame off the edges.
+  cv::Mat sparse(frame.size(), CV_8UC1, cv::Scalar(0));
+  for (int x = 30; x < frame.cols; x += 60) cv::line(sparse, {x, 0}, {x, frame.rows - 1}, 255);
+  const Extraction strict_result = strict.Extract(frame, cv::Mat(), sparse);
+  const Extraction fill_result = fill.Extract(frame, cv::Mat(), sparse);
+  const int unfiltered = Extractor(unfiltered_options).Extract(frame).stats.final_count;
+  const int quota = strict_options.fast.num_features;
+  ASSERT_LT(strict_result.stats.final_count, unfiltered / 2);
+  EXPECT_EQ(strict_result.stats.edge_fill, 0);
+  EXPECT_GE(fill_result.stats.final_count, unfiltered * 95 / 100);
+  EXPECT_LE(fill_result.stats.final_count, quota);
+  EXPECT_EQ(fill_result.stats.edge_fill,
+            fill_result.stats.final_count - strict_result.stats.final_count);
+  EXPECT_EQ(fill_result.descriptors.rows, fill_result.stats.final_count);
+  EXPECT_THAT(fill_result.stats.stages_ran, ::testing::Contains("edge-fill"));
+  auto same = [](const cv::KeyPoint& a, const cv::KeyPoint& b) {
+    return a.pt == b.pt && a.octave == b.octave && a.angle == b.angle;
+  };
+  for (const auto& point : strict_result.keypoints) {
+    EXPECT_TRUE(std::any_of(fill_result.keypoints.begin(), fill_result.keypoints.end(),
+                            [&](const cv::KeyPoint& other) { return same(point, other); }))
+        << point.pt << " level " << point.octave;
+  }
+
+  // Edges everywhere: the strict filter leaves every level its quota, and the fill adds nothing.
+  const cv::Mat everywhere(frame.size(), CV_8UC1, cv::Scalar(255));
+  const Extraction strict_full = strict.Extract(frame, cv::Mat(), everywhere);
+  const Extraction fill_full = fill.Extract(frame, cv::Mat(), everywhere);
+  EXPECT_EQ(fill_full.stats.edge_fill, 0);
+  ASSERT_EQ(fill_full.keypoints.size(), strict_full.keypoints.size());
+  for (std::size_t i = 0; i < fill_full.keypoints.size(); ++i) {
+    EXPECT_TRUE(same(fill_full.keypoints[i], strict_full.keypoints[i])) << i;
+  }
+  EXPECT_EQ(cv::norm(fill_full.descriptors, strict_full.descriptors, cv::NORM_HAMMING), 0.0);
+}
+
 TEST(Extractor, ReportsSkippedStagesWithoutMaps) {
   const cv::Mat frame =
       noctua::testing::ReadImageOrThrow(noctua::testing::Fr1RgbPaths(1)[0], cv::IMREAD_COLOR);

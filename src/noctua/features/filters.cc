@@ -23,7 +23,7 @@ void FilterByMask(std::vector<cv::KeyPoint>& points, double scale, const cv::Mat
 }
 
 void FilterByEdgeDistance(std::vector<cv::KeyPoint>& points, double scale, const cv::Mat& edge_map,
-                          double radius_px) {
+                          double radius_px, std::vector<cv::KeyPoint>* dropped) {
   CV_Assert(edge_map.type() == CV_8UC1);
   const double limit = radius_px * scale;
   const double limit_squared = limit * limit;
@@ -56,8 +56,31 @@ void FilterByEdgeDistance(std::vector<cv::KeyPoint>& points, double scale, const
     for (int dy = 1; dy <= reach; ++dy) {
       if (edge_in_row(p.y - dy, p.x, dy) || edge_in_row(p.y + dy, p.x, dy)) return false;
     }
+    if (dropped) dropped->push_back(point);
     return true;
   });
+}
+
+std::vector<cv::KeyPoint> FillCandidates(std::vector<cv::KeyPoint> dropped,
+                                         const std::vector<cv::KeyPoint>& kept,
+                                         const cv::Size& level_size, int window) {
+  const int radius = window / 2;
+  cv::Mat near_kept(level_size, CV_8UC1, cv::Scalar(0));
+  for (const cv::KeyPoint& point : kept) {
+    const cv::Point p(std::clamp(cvRound(point.pt.x), 0, level_size.width - 1),
+                      std::clamp(cvRound(point.pt.y), 0, level_size.height - 1));
+    const cv::Rect window_rect(p.x - radius, p.y - radius, 2 * radius + 1, 2 * radius + 1);
+    near_kept(window_rect & cv::Rect(0, 0, level_size.width, level_size.height)).setTo(1);
+  }
+  std::erase_if(dropped, [&](const cv::KeyPoint& point) {
+    const int x = std::clamp(cvRound(point.pt.x), 0, level_size.width - 1);
+    const int y = std::clamp(cvRound(point.pt.y), 0, level_size.height - 1);
+    return near_kept.at<uchar>(y, x) != 0;
+  });
+  // After the kept points have claimed their windows, as one suppression over both sets with the
+  // kept points first would: a dropped point next to a kept one no longer suppresses others.
+  SuppressNonMaxima(dropped, level_size, window);
+  return dropped;
 }
 
 void SuppressNonMaxima(std::vector<cv::KeyPoint>& points, const cv::Size& level_size, int window) {

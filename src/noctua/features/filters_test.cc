@@ -2,8 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <opencv2/core.hpp>
+#include <vector>
 
 namespace noctua::features {
 namespace {
@@ -44,6 +46,41 @@ TEST(FilterByEdgeDistance, KeepsPointsWithinTheScaledRadius) {
   coarse = {At(47.0f / 1.44f, 10, 1, 2)};
   FilterByEdgeDistance(coarse, 1.44, edges, 2.1);
   EXPECT_EQ(coarse.size(), 1u);
+}
+
+TEST(FilterByEdgeDistance, HandsBackWhatItDrops) {
+  cv::Mat edges(100, 100, CV_8UC1, cv::Scalar(0));
+  edges.col(50).setTo(255);
+  std::vector<cv::KeyPoint> points = {At(10, 10, 1), At(50, 10, 2), At(70, 30, 3), At(51, 60, 4)};
+  std::vector<cv::KeyPoint> dropped = {At(1, 1, 9)};  // appended to, not replaced
+  FilterByEdgeDistance(points, 1.0, edges, 2.0, &dropped);
+  ASSERT_EQ(points.size(), 2u);
+  EXPECT_EQ(points[0].response, 2.0f);
+  EXPECT_EQ(points[1].response, 4.0f);
+  ASSERT_EQ(dropped.size(), 3u);
+  EXPECT_EQ(dropped[1].response, 1.0f);
+  EXPECT_EQ(dropped[2].response, 3.0f);
+}
+
+TEST(FillCandidates, ThinsTheDroppedAndKeepsClearOfKeptPoints) {
+  const cv::Size size(100, 100);
+  const std::vector<cv::KeyPoint> kept = {At(50, 50, 100)};
+  const std::vector<cv::KeyPoint> dropped = {
+      At(20, 20, 5), At(21, 21, 7),  // one 3x3 window: only the stronger stays
+      At(51, 51, 9),                 // shares a window with a kept point: never added
+      At(52, 50, 8),                 // two pixels off: clear of it
+      At(80, 10, 1)};
+  const std::vector<cv::KeyPoint> candidates = FillCandidates(dropped, kept, size, 3);
+  std::vector<float> responses;
+  for (const auto& point : candidates) responses.push_back(point.response);
+  std::sort(responses.begin(), responses.end());
+  EXPECT_EQ(responses, (std::vector<float>{1, 7, 8}));
+  // Window 1 (no suppression): only the exact pixel of a kept point is excluded.
+  const std::vector<cv::KeyPoint> unthinned =
+      FillCandidates({At(20, 20, 5), At(21, 21, 7), At(50, 50, 3), At(51, 51, 9)}, kept, size, 1);
+  EXPECT_EQ(unthinned.size(), 3u);
+  EXPECT_TRUE(FillCandidates({}, kept, size, 3).empty());
+  EXPECT_EQ(FillCandidates({At(0, 0, 1), At(99, 99, 1)}, {}, size, 5).size(), 2u);
 }
 
 TEST(FilterByEdgeDistance, RowsWithoutEdgesAndAnEmptyMapKeepNothing) {
