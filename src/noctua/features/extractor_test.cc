@@ -261,6 +261,24 @@ TEST(Extractor, EdgeFillTopsUpStarvedLevelsAndKeepsTheStrictPoints) {
   EXPECT_EQ(cv::norm(fill_full.descriptors, strict_full.descriptors, cv::NORM_HAMMING), 0.0);
 }
 
+// The fill takes only what the edge filter dropped: points in the dynamic mask stay out.
+TEST(Extractor, EdgeFillNeverBringsBackDynamicPoints) {
+  const cv::Mat frame =
+      noctua::testing::ReadImageOrThrow(noctua::testing::Fr1RgbPaths(1)[0], cv::IMREAD_COLOR);
+  ExtractorOptions options;
+  options.edge_filter.fill_to_quota = true;
+  const cv::Rect person(200, 100, 180, 300);
+  cv::Mat dynamic(frame.size(), CV_8UC1, cv::Scalar(0));
+  dynamic(person).setTo(255);
+  const cv::Mat no_edges(frame.size(), CV_8UC1, cv::Scalar(0));
+  const Extraction result = Extractor(options).Extract(frame, dynamic, no_edges);
+  ASSERT_GT(result.stats.edge_fill, 500);
+  EXPECT_EQ(result.stats.after_edge, 0);
+  for (const auto& point : result.keypoints) {
+    EXPECT_FALSE(person.contains(cv::Point(cvRound(point.pt.x), cvRound(point.pt.y)))) << point.pt;
+  }
+}
+
 TEST(Extractor, ReportsSkippedStagesWithoutMaps) {
   const cv::Mat frame =
       noctua::testing::ReadImageOrThrow(noctua::testing::Fr1RgbPaths(1)[0], cv::IMREAD_COLOR);
