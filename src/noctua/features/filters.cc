@@ -61,31 +61,18 @@ void FilterByEdgeDistance(std::vector<cv::KeyPoint>& points, double scale, const
   });
 }
 
-std::vector<cv::KeyPoint> FillCandidates(std::vector<cv::KeyPoint> dropped,
-                                         const std::vector<cv::KeyPoint>& kept,
-                                         const cv::Size& level_size, int window) {
-  const int radius = window / 2;
-  cv::Mat near_kept(level_size, CV_8UC1, cv::Scalar(0));
-  for (const cv::KeyPoint& point : kept) {
-    const cv::Point p(std::clamp(cvRound(point.pt.x), 0, level_size.width - 1),
-                      std::clamp(cvRound(point.pt.y), 0, level_size.height - 1));
-    const cv::Rect window_rect(p.x - radius, p.y - radius, 2 * radius + 1, 2 * radius + 1);
-    near_kept(window_rect & cv::Rect(0, 0, level_size.width, level_size.height)).setTo(1);
-  }
-  std::erase_if(dropped, [&](const cv::KeyPoint& point) {
-    const int x = std::clamp(cvRound(point.pt.x), 0, level_size.width - 1);
-    const int y = std::clamp(cvRound(point.pt.y), 0, level_size.height - 1);
-    return near_kept.at<uchar>(y, x) != 0;
-  });
-  // After the kept points have claimed their windows, as one suppression over both sets with the
-  // kept points first would: a dropped point next to a kept one no longer suppresses others.
-  SuppressNonMaxima(dropped, level_size, window);
-  return dropped;
+namespace {
+
+cv::Point ClampedPixel(const cv::KeyPoint& point, const cv::Size& size) {
+  return {std::clamp(cvRound(point.pt.x), 0, size.width - 1),
+          std::clamp(cvRound(point.pt.y), 0, size.height - 1)};
 }
 
-void SuppressNonMaxima(std::vector<cv::KeyPoint>& points, const cv::Size& level_size, int window) {
-  if (points.size() < 2) return;
-  // Strongest first, so a point survives only if no stronger survivor is inside its window.
+// Greedy suppression, strongest first: a point survives only if no stronger survivor and no
+// `claimed` point lies inside its window.
+void SuppressAgainst(std::vector<cv::KeyPoint>& points, const std::vector<cv::KeyPoint>& claimed,
+                     const cv::Size& level_size, int window) {
+  if (points.empty() || (claimed.empty() && points.size() < 2)) return;
   std::vector<std::size_t> order(points.size());
   std::iota(order.begin(), order.end(), 0);
   std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
@@ -93,19 +80,19 @@ void SuppressNonMaxima(std::vector<cv::KeyPoint>& points, const cv::Size& level_
   });
   const int radius = window / 2;
   cv::Mat taken(level_size, CV_8UC1, cv::Scalar(0));
+  for (const cv::KeyPoint& point : claimed) taken.at<uchar>(ClampedPixel(point, level_size)) = 1;
   std::vector<cv::KeyPoint> kept;
   kept.reserve(points.size());
   for (const std::size_t index : order) {
     const cv::KeyPoint& point = points[index];
-    const int x = std::clamp(cvRound(point.pt.x), 0, level_size.width - 1);
-    const int y = std::clamp(cvRound(point.pt.y), 0, level_size.height - 1);
+    const cv::Point p = ClampedPixel(point, level_size);
     bool suppressed = false;
     for (int dy = -radius; dy <= radius && !suppressed; ++dy) {
-      const int yy = y + dy;
+      const int yy = p.y + dy;
       if (yy < 0 || yy >= level_size.height) continue;
       const uchar* row = taken.ptr<uchar>(yy);
       for (int dx = -radius; dx <= radius; ++dx) {
-        const int xx = x + dx;
+        const int xx = p.x + dx;
         if (xx >= 0 && xx < level_size.width && row[xx]) {
           suppressed = true;
           break;
@@ -113,10 +100,25 @@ void SuppressNonMaxima(std::vector<cv::KeyPoint>& points, const cv::Size& level_
       }
     }
     if (suppressed) continue;
-    taken.at<uchar>(y, x) = 1;
+    taken.at<uchar>(p) = 1;
     kept.push_back(point);
   }
   points = std::move(kept);
+}
+
+}  // namespace
+
+std::vector<cv::KeyPoint> FillCandidates(std::vector<cv::KeyPoint> dropped,
+                                         const std::vector<cv::KeyPoint>& kept,
+                                         const cv::Size& level_size, int window) {
+  // One suppression in which the kept points have already claimed their windows: a dropped
+  // point next to a kept one never survives, so it suppresses no other.
+  SuppressAgainst(dropped, kept, level_size, window);
+  return dropped;
+}
+
+void SuppressNonMaxima(std::vector<cv::KeyPoint>& points, const cv::Size& level_size, int window) {
+  SuppressAgainst(points, {}, level_size, window);
 }
 
 }  // namespace noctua::features
