@@ -109,7 +109,8 @@ void RunSlam(const SlamArguments& args) {
   method_config.detect_ahead_options.every_n = args.detect_every;
   const std::unique_ptr<pipeline::FeatureMethod> method =
       pipeline::CreateMethod(args.method.method, method_config);
-  const io::Sequence sequence = io::Sequence::Open(args.dataset);
+  const io::Sequence sequence =
+      io::Sequence::Open(args.dataset, {.ground_truth_convention = setup.camera.ground_truth});
   PrepareOutputDir(args.out, args.force);
   const std::filesystem::path out = args.out;
 

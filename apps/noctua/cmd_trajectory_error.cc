@@ -3,11 +3,13 @@
 #include <iostream>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "commands.h"
 #include "noctua/eval/trajectory_error.h"
 #include "noctua/eval/trajectory_plot.h"
 #include "noctua/eval/trajectory_report.h"
+#include "noctua/io/ground_truth.h"
 #include "noctua/io/trajectory.h"
 #include "output_dir.h"
 
@@ -19,6 +21,13 @@ struct TrajectoryFiles {
   std::string estimate;
   std::string out;
   bool force = false;
+  std::string convention = "camera";  // what GT holds (io::GroundTruthConvention's names)
+
+  // The ground truth as camera poses.
+  io::Trajectory GroundTruth() const {
+    return io::CameraTrajectoryFromGroundTruth(io::ReadTumTrajectory(ground_truth),
+                                               io::ParseGroundTruthConvention(convention));
+  }
 };
 
 // What one error (`name`: "ate" or "rpe") gives: its table, its JSON and the plots it draws.
@@ -36,6 +45,7 @@ void WriteErrorReport(const std::string& name, const TrajectoryFiles& files, Err
   const std::filesystem::path out = files.out;
   report.json["ground_truth"] = files.ground_truth;
   report.json["estimate"] = files.estimate;
+  report.json["ground_truth_convention"] = files.convention;
   WriteTextFileAtomically(out / (name + ".json"), report.json.dump(2) + "\n");
   WriteTextFileAtomically(out / (name + ".md"), report.table);
   report.plot(out);
@@ -56,6 +66,16 @@ CLI::App* AddErrorCommand(CLI::App& app, const std::string& name, const std::str
   command->add_option("--out", files.out,
                       "Folder for " + name + ".json, " + name + ".md and PNG plots");
   command->add_flag("--force", files.force, "Write into a non-empty output folder");
+  std::vector<std::string> conventions;
+  for (const auto& [value, convention] : io::GroundTruthConventionNames()) {
+    conventions.push_back(convention);
+  }
+  command
+      ->add_option("--ground-truth-convention", files.convention,
+                   "What GT's poses are: camera poses, or the motion-capture marker of the Bonn "
+                   "RGB-D Dynamic dataset (turned into camera poses first)")
+      ->check(CLI::IsMember(conventions))
+      ->capture_default_str();
   return command;
 }
 
@@ -79,9 +99,8 @@ void AddAteCommand(CLI::App& app) {
   command->add_flag("--scale", args->options.with_scale,
                     "Align with a similarity (scale too), for monocular estimates");
   command->callback([args] {
-    const eval::AteResult ate =
-        eval::ComputeAte(io::ReadTumTrajectory(args->files.ground_truth),
-                         io::ReadTumTrajectory(args->files.estimate), args->options);
+    const eval::AteResult ate = eval::ComputeAte(
+        args->files.GroundTruth(), io::ReadTumTrajectory(args->files.estimate), args->options);
     ErrorReport report{eval::FormatAteMarkdown(ate), eval::ToJson(ate),
                        [&ate](const std::filesystem::path& out) { eval::PlotAte(ate, out, "ate"); },
                        "ate_trajectory.png, ate_error.png"};
@@ -99,9 +118,8 @@ void AddRpeCommand(CLI::App& app) {
   command->add_option("--delta", args->options.delta_s, "Time step of the relative poses, s")
       ->capture_default_str();
   command->callback([args] {
-    const eval::RpeResult rpe =
-        eval::ComputeRpe(io::ReadTumTrajectory(args->files.ground_truth),
-                         io::ReadTumTrajectory(args->files.estimate), args->options);
+    const eval::RpeResult rpe = eval::ComputeRpe(
+        args->files.GroundTruth(), io::ReadTumTrajectory(args->files.estimate), args->options);
     ErrorReport report{eval::FormatRpeMarkdown(rpe, args->options.delta_s), eval::ToJson(rpe),
                        [&rpe](const std::filesystem::path& out) { eval::PlotRpe(rpe, out, "rpe"); },
                        "rpe_error.png"};

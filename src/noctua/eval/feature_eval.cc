@@ -28,7 +28,8 @@ void FeatureEvalOptions::Check() const {
 }
 
 EvalSequence::EvalSequence(const fs::path& dir, const io::CameraConfig& camera)
-    : sequence_(io::Sequence::Open(dir)), camera_(camera) {
+    : sequence_(io::Sequence::Open(dir, {.ground_truth_convention = camera.ground_truth})),
+      camera_(camera) {
   camera_.Check();
   if (!sequence_.has_ground_truth()) {
     ThrowFileError(dir,

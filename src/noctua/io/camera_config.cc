@@ -70,6 +70,15 @@ CameraConfig ReadCameraConfig(const std::filesystem::path& path) {
   orb.num_levels = OptionalInteger(root, "ORBextractor.nLevels", orb.num_levels, path);
   orb.ini_th_fast = OptionalInteger(root, "ORBextractor.iniThFAST", orb.ini_th_fast, path);
   orb.min_th_fast = OptionalInteger(root, "ORBextractor.minThFAST", orb.min_th_fast, path);
+  if (root["GroundTruth.convention"]) {
+    const YAML::Node node = root["GroundTruth.convention"];
+    try {
+      config.ground_truth = ParseGroundTruthConvention(node.as<std::string>());
+    } catch (const std::exception& error) {
+      ThrowLineError(path, node.Mark().line + 1,
+                     std::string("setting 'GroundTruth.convention': ") + error.what());
+    }
+  }
   try {
     config.Check();
   } catch (const Error& error) {

@@ -3,6 +3,7 @@
 #include <filesystem>
 
 #include "noctua/geometry/camera.h"
+#include "noctua/io/ground_truth.h"
 
 namespace noctua::io {
 
@@ -25,6 +26,9 @@ struct CameraConfig {
   geometry::Distortion distortion;
   double depth_factor = 5000.0;  // DepthMapFactor: metres = stored value / depth_factor
   OrbExtractorSettings orb;
+  // GroundTruth.convention (noctua's key, optional): what the dataset's groundtruth.txt holds
+  // ("camera", or "bonn-marker" for Bonn RGB-D Dynamic), so that errors use camera poses.
+  GroundTruthConvention ground_truth = GroundTruthConvention::kCamera;
 
   geometry::PinholeCamera Camera() const { return {intrinsics, distortion}; }
   void Check() const;
@@ -32,9 +36,10 @@ struct CameraConfig {
 
 // Reads a camera preset in ORB-SLAM2/3 settings form (Camera.fx, Camera.fy, Camera.cx,
 // Camera.cy, Camera.k1, Camera.k2, Camera.p1, Camera.p2, Camera.k3, Camera.width,
-// Camera.height, DepthMapFactor, ORBextractor.*; ORB-SLAM3's "Camera1." prefix is accepted for
-// the intrinsics too). Intrinsics, size and DepthMapFactor are required, distortion defaults
-// to none. Throws noctua::Error naming the file and the key for anything missing or invalid.
+// Camera.height, DepthMapFactor, ORBextractor.*, GroundTruth.convention; ORB-SLAM3's "Camera1."
+// prefix is accepted for the intrinsics too). Intrinsics, size and DepthMapFactor are required,
+// distortion defaults to none. Throws noctua::Error naming the file and the key for anything
+// missing or invalid.
 CameraConfig ReadCameraConfig(const std::filesystem::path& path);
 
 }  // namespace noctua::io

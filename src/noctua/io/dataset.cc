@@ -159,7 +159,8 @@ Sequence Sequence::Open(const fs::path& dir, const SequenceOptions& options) {
 
   Trajectory ground_truth;
   if (fs::exists(dir / "groundtruth.txt"))
-    ground_truth = ReadTumTrajectory(dir / "groundtruth.txt");
+    ground_truth = CameraTrajectoryFromGroundTruth(ReadTumTrajectory(dir / "groundtruth.txt"),
+                                                   options.ground_truth_convention);
 
   std::vector<Frame> frames;
   frames.reserve(pairs.size());

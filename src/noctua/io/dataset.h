@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "noctua/geometry/se3.h"
+#include "noctua/io/ground_truth.h"
 #include "noctua/io/trajectory.h"
 
 namespace noctua::io {
@@ -62,6 +63,8 @@ cv::Mat DepthToMetres(const cv::Mat& depth16, double depth_factor);
 struct SequenceOptions {
   double max_association_dt_s = 0.02;   // colour/depth pairing window without associations.txt
   double max_ground_truth_gap_s = 0.1;  // no interpolated pose across larger gaps
+  // What groundtruth.txt holds; the sequence's ground truth is always camera poses.
+  GroundTruthConvention ground_truth_convention = GroundTruthConvention::kCamera;
 
   void Check() const;
 };
@@ -83,6 +86,7 @@ class Sequence {
   std::size_t size() const { return frames_.size(); }
   const Frame& frame(std::size_t i) const { return frames_.at(i); }
   bool has_ground_truth() const { return !ground_truth_.empty(); }
+  // T_world_camera, converted from groundtruth.txt by SequenceOptions::ground_truth_convention.
   const Trajectory& ground_truth() const { return ground_truth_; }
 
   // Reads a frame's images; depth in metres with `depth_factor` (DepthMapFactor). Throws

@@ -45,7 +45,8 @@ SimulationReport SimulateSequence(const fs::path& input, const io::CameraConfig&
                                   const SimulationProgress& progress) {
   options.Check();
   camera.Check();
-  const io::Sequence sequence = io::Sequence::Open(input);
+  const io::Sequence sequence =
+      io::Sequence::Open(input, {.ground_truth_convention = camera.ground_truth});
   const fs::path ground_truth = input / "groundtruth.txt";
   if (!fs::is_regular_file(ground_truth)) {
     ThrowFileError(ground_truth, "missing: a simulated sequence keeps the original ground truth");
