@@ -29,11 +29,48 @@ void CheckExclusionMask(const cv::Mat& mask, const cv::Size& size) {
   }
 }
 
-// Our extractor in one of its configurations.
+// The dynamic stage every method shares: masks from the configured detector (no source without
+// one) and, when detection runs ahead on its own thread, the pipeline frames are submitted to.
+struct DynamicStage {
+  features::DynamicMaskSource source;
+  std::shared_ptr<dynamic::AsyncMaskPipeline> ahead;
+};
+
+DynamicStage MakeDynamicStage(const MethodConfig& config) {
+  DynamicStage stage;
+  if (config.detector_model.empty()) return stage;
+  std::shared_ptr<dynamic::Detector> detector =
+      dynamic::LoadDetector(config.detector_model, config.detector);
+  if (!config.detect_ahead) {
+    stage.source = dynamic::MakeDynamicMaskSource(std::move(detector), config.motion_levels,
+                                                  config.dynamic_mask);
+    return stage;
+  }
+  auto masks = std::make_shared<dynamic::AsyncMaskPipeline>(
+      std::move(detector), config.motion_levels, config.dynamic_mask, config.detect_ahead_options);
+  stage.ahead = masks;
+  stage.source = [masks](const cv::Mat& image) {
+    cv::Mat mask = masks->Next();
+    if (mask.size() != image.size()) {
+      throw Error("dynamic mask detected ahead does not belong to this frame (" +
+                  std::to_string(mask.cols) + "x" + std::to_string(mask.rows) + " for " +
+                  std::to_string(image.cols) + "x" + std::to_string(image.rows) +
+                  "): frames must be submitted ahead in the order they are extracted");
+    }
+    return mask;
+  };
+  return stage;
+}
+
+// Our extractor in one of its configurations; its dynamic filter takes the stage's masks.
 class ExtractorMethod : public FeatureMethod {
  public:
-  ExtractorMethod(const std::string& name, const ExtractorOptions& options)
-      : FeatureMethod(name), extractor_(features::Extractor::Create(options)) {}
+  ExtractorMethod(const std::string& name, ExtractorOptions options, DynamicStage dynamic)
+      : FeatureMethod(name), detection_ahead_(std::move(dynamic.ahead)) {
+    options.dynamic_filter.enabled = options.dynamic_filter.enabled || dynamic.source != nullptr;
+    extractor_ = features::Extractor::Create(options);
+    if (dynamic.source) extractor_->SetDynamicMaskSource(std::move(dynamic.source));
+  }
 
   Extraction Run(const cv::Mat& image, const cv::Mat& exclusion_mask) override {
     if (extractor_->options().dynamic_filter.enabled) {
@@ -57,40 +94,71 @@ class ExtractorMethod : public FeatureMethod {
   }
   features::Extractor& extractor() { return *extractor_; }
 
-  // The extractor's dynamic mask comes from `masks`, one per extracted frame, in order.
-  void DetectAhead(std::shared_ptr<dynamic::AsyncMaskPipeline> masks) {
-    detection_ahead_ = masks;
-    extractor_->SetDynamicMaskSource([masks](const cv::Mat& image) {
-      cv::Mat mask = masks->Next();
-      if (mask.size() != image.size()) {
-        throw Error("dynamic mask detected ahead does not belong to this frame (" +
-                    std::to_string(mask.cols) + "x" + std::to_string(mask.rows) + " for " +
-                    std::to_string(image.cols) + "x" + std::to_string(image.rows) +
-                    "): frames must be submitted ahead in the order they are extracted");
-      }
-      return mask;
-    });
-  }
-
  private:
   cv::Ptr<features::Extractor> extractor_;
   std::shared_ptr<dynamic::AsyncMaskPipeline> detection_ahead_;
 };
 
+// A Feature2D whose points avoid the dynamic regions of each frame: the detector's mask joins the
+// caller's (OpenCV's sense: zero excludes) before the wrapped Feature2D detects. This is how the
+// methods that are not our extractor (OpenCV's ORB, SIFT, SURF, FAST) get the dynamic stage.
+class DynamicRegionFeature2D : public cv::Feature2D {
+ public:
+  DynamicRegionFeature2D(cv::Ptr<cv::Feature2D> inner, features::DynamicMaskSource source)
+      : inner_(std::move(inner)), source_(std::move(source)) {}
+
+  void detectAndCompute(cv::InputArray image, cv::InputArray mask,
+                        std::vector<cv::KeyPoint>& keypoints, cv::OutputArray descriptors,
+                        bool useProvidedKeypoints) override {
+    // The detector sees the frame as given (colour when the caller has colour); the wrapped
+    // Feature2D, grey, as it would from OpenCvMethod.
+    const cv::Mat frame = image.getMat();
+    cv::Mat allowed = mask.getMat();
+    if (!useProvidedKeypoints) {
+      const cv::Mat dynamic = source_(frame);
+      CheckExclusionMask(dynamic, frame.size());
+      cv::Mat static_part = dynamic == 0;
+      if (!allowed.empty()) {
+        CheckExclusionMask(allowed, frame.size());
+        static_part &= allowed != 0;
+      }
+      allowed = static_part;
+    }
+    inner_->detectAndCompute(image::ToGray8U(frame), allowed, keypoints, descriptors,
+                             useProvidedKeypoints);
+  }
+  int descriptorSize() const override { return inner_->descriptorSize(); }
+  int descriptorType() const override { return inner_->descriptorType(); }
+  int defaultNorm() const override { return inner_->defaultNorm(); }
+  cv::String getDefaultName() const override {
+    return inner_->getDefaultName() + ".DynamicRegions";
+  }
+
+ private:
+  cv::Ptr<cv::Feature2D> inner_;
+  features::DynamicMaskSource source_;
+};
+
 // Any OpenCV Feature2D (OpenCV's ORB, SIFT, ...), timed as one stage.
 class OpenCvMethod : public FeatureMethod {
  public:
-  OpenCvMethod(const std::string& name, cv::Ptr<cv::Feature2D> feature2d)
-      : FeatureMethod(name), feature2d_(std::move(feature2d)) {}
+  OpenCvMethod(const std::string& name, cv::Ptr<cv::Feature2D> feature2d, DynamicStage dynamic)
+      : FeatureMethod(name),
+        wrapped_(dynamic.source != nullptr),
+        feature2d_(dynamic.source ? cv::Ptr<cv::Feature2D>(cv::makePtr<DynamicRegionFeature2D>(
+                                        std::move(feature2d), std::move(dynamic.source)))
+                                  : std::move(feature2d)),
+        detection_ahead_(std::move(dynamic.ahead)) {}
 
   Extraction Run(const cv::Mat& image, const cv::Mat& exclusion_mask) override {
     Stopwatch watch;
-    const cv::Mat gray = image::ToGray8U(image);
-    CheckExclusionMask(exclusion_mask, gray.size());
+    // Grey unless the dynamic stage wraps the method: its detector wants the colour frame.
+    const cv::Mat input = wrapped_ ? image : image::ToGray8U(image);
+    CheckExclusionMask(exclusion_mask, image.size());
     cv::Mat allowed;
     if (!exclusion_mask.empty()) allowed = exclusion_mask == 0;
     Extraction out;
-    feature2d_->detectAndCompute(gray, allowed, out.keypoints, out.descriptors);
+    feature2d_->detectAndCompute(input, allowed, out.keypoints, out.descriptors);
     const int count = static_cast<int>(out.keypoints.size());
     out.stats.detected = out.stats.after_mask = out.stats.after_dynamic = count;
     out.stats.after_edge = out.stats.after_nms = out.stats.final_count = count;
@@ -100,9 +168,14 @@ class OpenCvMethod : public FeatureMethod {
   }
   int norm_type() const override { return feature2d_->defaultNorm(); }
   cv::Ptr<cv::Feature2D> feature2d() const override { return feature2d_; }
+  std::shared_ptr<dynamic::AsyncMaskPipeline> detection_ahead() const override {
+    return detection_ahead_;
+  }
 
  private:
+  bool wrapped_;
   cv::Ptr<cv::Feature2D> feature2d_;
+  std::shared_ptr<dynamic::AsyncMaskPipeline> detection_ahead_;
 };
 
 // Plain single-scale FAST corners (the paper's FAST baseline): the strongest num_features corners
@@ -173,52 +246,51 @@ ExtractorOptions OptionsForMethod(const std::string& name, const ExtractorOption
 
 std::unique_ptr<FeatureMethod> CreateMethod(const std::string& name, const MethodConfig& config) {
   config.Check();
+  const std::vector<std::string> names = MethodNames();
+  if (std::find(names.begin(), names.end(), name) == names.end()) {
+    std::string known;
+    for (const auto& candidate : names) known += (known.empty() ? "" : ", ") + candidate;
+    throw Error("unknown method '" + name + "' (known: " + known + ")");
+  }
+  // Every method takes the dynamic stage: the detector is loaded for whichever is asked for.
+  DynamicStage dynamic = MakeDynamicStage(config);
   const features::PyramidFastOptions& fast = config.extractor.fast;
   if (name == "orb-opencv") {
     return std::make_unique<OpenCvMethod>(
-        name, cv::ORB::create(fast.num_features, static_cast<float>(fast.scale_factor),
-                              fast.num_levels, 31, 0, 2, cv::ORB::HARRIS_SCORE,
-                              features::kPatchSize, fast.initial_fast_threshold));
+        name,
+        cv::ORB::create(fast.num_features, static_cast<float>(fast.scale_factor), fast.num_levels,
+                        31, 0, 2, cv::ORB::HARRIS_SCORE, features::kPatchSize,
+                        fast.initial_fast_threshold),
+        std::move(dynamic));
   }
   if (name == "sift") {
-    return std::make_unique<OpenCvMethod>(name, cv::SIFT::create(fast.num_features));
+    return std::make_unique<OpenCvMethod>(name, cv::SIFT::create(fast.num_features),
+                                          std::move(dynamic));
   }
   if (name == "surf") {
     features::SurfOptions surf;
     surf.max_features = fast.num_features;
-    return std::make_unique<OpenCvMethod>(name, features::Surf::Create(surf));
+    return std::make_unique<OpenCvMethod>(name, features::Surf::Create(surf), std::move(dynamic));
   }
   if (name == "fast") {
-    return std::make_unique<OpenCvMethod>(name, cv::makePtr<FastBriefDetector>(fast));
+    return std::make_unique<OpenCvMethod>(name, cv::makePtr<FastBriefDetector>(fast),
+                                          std::move(dynamic));
   }
-  if (name == "orb" || name == "he-orb" || name == "clahe-orb") {
-    return std::make_unique<ExtractorMethod>(name, OptionsForMethod(name, config.extractor));
+  if (name == "paper" && !dynamic.source) {
+    static std::once_flag said;
+    std::call_once(said, [] {
+      spdlog::warn(
+          "paper: no detector model configured (--detector or dynamic.model): the dynamic "
+          "filter is off, points on moving people are kept");
+    });
   }
+  auto method = std::make_unique<ExtractorMethod>(name, OptionsForMethod(name, config.extractor),
+                                                  std::move(dynamic));
   if (name == "paper") {
-    auto method = std::make_unique<ExtractorMethod>(name, OptionsForMethod(name, config.extractor));
     method->extractor().SetEdgeMapSource(
         edges::MakeEdgeMapSource(edges::CreateEdgeDetector(edges::EdgeDetectorOptions())));
-    if (!config.detector_model.empty() && config.detect_ahead) {
-      method->DetectAhead(std::make_shared<dynamic::AsyncMaskPipeline>(
-          dynamic::LoadDetector(config.detector_model, config.detector), config.motion_levels,
-          config.dynamic_mask, config.detect_ahead_options));
-    } else if (!config.detector_model.empty()) {
-      method->extractor().SetDynamicMaskSource(dynamic::MakeDynamicMaskSource(
-          dynamic::LoadDetector(config.detector_model, config.detector), config.motion_levels,
-          config.dynamic_mask));
-    } else {
-      static std::once_flag said;
-      std::call_once(said, [] {
-        spdlog::warn(
-            "paper: no detector model configured (--detector or dynamic.model): the dynamic "
-            "filter is off, points on moving people are kept");
-      });
-    }
-    return method;
   }
-  std::string known;
-  for (const auto& candidate : MethodNames()) known += (known.empty() ? "" : ", ") + candidate;
-  throw Error("unknown method '" + name + "' (known: " + known + ")");
+  return method;
 }
 
 }  // namespace noctua::pipeline

@@ -15,11 +15,12 @@
 namespace noctua::pipeline {
 
 // Settings shared by every method; each method takes what applies to it (the ORB-SLAM keys apply
-// to all pyramid methods, the paper's stages only to `paper`).
+// to all pyramid methods, the paper's edge and NMS stages only to `paper`). The dynamic stage
+// applies to every method: with a detector model, no method keeps points in dynamic regions.
 struct MethodConfig {
-  features::ExtractorOptions extractor;  // base options, e.g. from a settings file
-  std::string detector_model;            // ONNX model for the paper's dynamic regions ("" = none)
-  dynamic::DetectorOptions detector;     // its input size and thresholds
+  features::ExtractorOptions extractor;      // base options, e.g. from a settings file
+  std::string detector_model;                // ONNX model for the dynamic regions ("" = none)
+  dynamic::DetectorOptions detector;         // its input size and thresholds
   dynamic::MotionLevelTable motion_levels;   // COCO class -> motion level (paper Table 1)
   dynamic::DynamicMaskOptions dynamic_mask;  // which levels are dynamic, box/instance, dilation
   // Detection on a thread of its own, every `detect_ahead.every_n`-th frame, instead of in line

@@ -255,6 +255,59 @@ TEST(CreateMethod, GrowingCarriedMasksKeepsPointsOffThePeopleAsTheyMove) {
   EXPECT_LT(grown, half);
 }
 
+// The dynamic stage belongs to every method: with a detector, none keeps a point in the regions
+// the detector marks on a real fr3 walking frame (the same detector's mask, built here), and
+// without one each keeps points there. Detection ahead gives the same points as in line.
+TEST(CreateMethod, EveryMethodTakesTheDetectorsDynamicRegions) {
+  const std::vector<cv::Mat> frames = Fr3WalkingFrames(1);
+  ASSERT_EQ(frames.size(), 1u);
+  const cv::Mat& frame = frames[0];
+  MethodConfig config;
+  config.detector_model = YoloV8n().string();
+  const auto detector = dynamic::LoadDetector(config.detector_model, config.detector);
+  const cv::Mat dynamic = dynamic::BuildDynamicMask(detector->Detect(frame), config.motion_levels,
+                                                    config.dynamic_mask, frame.size());
+  ASSERT_GT(cv::countNonZero(dynamic), frame.total() / 10);
+  const auto inside = [&](const std::vector<cv::KeyPoint>& points) {
+    int count = 0;
+    for (const cv::KeyPoint& point : points) {
+      const int x = std::clamp(cvRound(point.pt.x), 0, frame.cols - 1);
+      const int y = std::clamp(cvRound(point.pt.y), 0, frame.rows - 1);
+      count += dynamic.at<uchar>(y, x) > 0;
+    }
+    return count;
+  };
+  for (const std::string& name : MethodNames()) {
+    SCOPED_TRACE(name);
+    const auto with = CreateMethod(name, config)->Run(frame);
+    const auto without = CreateMethod(name, MethodConfig{})->Run(frame);
+    EXPECT_GT(inside(without.keypoints), 20);
+    EXPECT_EQ(inside(with.keypoints), 0);
+    EXPECT_GT(with.keypoints.size(), 50u);
+    EXPECT_EQ(with.descriptors.rows, static_cast<int>(with.keypoints.size()));
+    // The same through the method's plain cv::Feature2D, the way the SLAM calls it.
+    std::vector<cv::KeyPoint> points;
+    cv::Mat descriptors;
+    CreateMethod(name, config)
+        ->feature2d()
+        ->detectAndCompute(frame, cv::noArray(), points, descriptors);
+    EXPECT_EQ(inside(points), 0);
+    EXPECT_EQ(points.size(), with.keypoints.size());
+
+    MethodConfig ahead = config;
+    ahead.detect_ahead = true;
+    ahead.detect_ahead_options.every_n = 1;
+    auto method = CreateMethod(name, ahead);
+    ASSERT_NE(method->detection_ahead(), nullptr);
+    method->detection_ahead()->Submit(frame);
+    const auto detected_ahead = method->Run(frame);
+    ASSERT_EQ(detected_ahead.keypoints.size(), with.keypoints.size());
+    EXPECT_EQ(cv::norm(detected_ahead.descriptors, with.descriptors,
+                       method->norm_type() == cv::NORM_HAMMING ? cv::NORM_HAMMING : cv::NORM_L2),
+              0.0);
+  }
+}
+
 TEST(CreateMethod, PaperWithABadDetectorPathNamesTheFile) {
   MethodConfig config;
   config.detector_model = "/nonexistent/detector.onnx";
