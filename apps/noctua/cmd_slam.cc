@@ -118,7 +118,9 @@ void RunSlam(const SlamArguments& args) {
   run_options.max_frames = args.max_frames;
   run_options.overlap_extraction = !args.sequential;
   if (const auto masks = method->detection_ahead()) {
-    run_options.lookahead = [masks](const cv::Mat& image) { masks->Submit(image); };
+    run_options.lookahead = [masks](const cv::Mat& image, const cv::Mat& depth_m) {
+      masks->Submit(image, depth_m);
+    };
   }
   const int every = std::max(1, args.progress_every);
   // Resident memory after every frame (reading /proc/self/statm costs microseconds).

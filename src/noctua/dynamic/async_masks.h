@@ -47,8 +47,9 @@ class AsyncMaskPipeline {
   AsyncMaskPipeline(const AsyncMaskPipeline&) = delete;
   AsyncMaskPipeline& operator=(const AsyncMaskPipeline&) = delete;
 
-  // Queues a frame for detection; returns at once.
-  void Submit(const cv::Mat& image);
+  // Queues a frame for detection; returns at once. With the frame's depth (CV_32F metres, 0 =
+  // none), regions are cut to their objects' depth segments (DynamicMaskOptions::depth_segment).
+  void Submit(const cv::Mat& image, const cv::Mat& depth_m = cv::Mat());
   // Waits for the mask of the oldest submitted frame whose mask has not been taken. Rethrows what
   // detection threw for that frame. Throws noctua::Error when no frame is outstanding.
   cv::Mat Next();
@@ -70,7 +71,11 @@ class AsyncMaskPipeline {
 
   mutable std::mutex mutex_;
   std::condition_variable changed_;
-  std::deque<cv::Mat> frames_;
+  struct Submitted {
+    cv::Mat image;
+    cv::Mat depth_m;
+  };
+  std::deque<Submitted> frames_;
   std::deque<Result> results_;
   long submitted_ = 0;
   long taken_ = 0;

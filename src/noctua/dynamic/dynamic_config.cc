@@ -15,9 +15,10 @@ DynamicConfig DynamicConfigFromYaml(const YAML::Node& root, const std::filesyste
   if (!node.IsDefined() || node.IsNull()) return config;
   if (!node.IsMap()) ThrowLineError(source, node.Mark().line + 1, "'dynamic' must be a map");
   const std::string name = source.string();
-  static const char* const kKnown[] = {"model",           "input_width",   "input_height",
-                                       "score_threshold", "nms_iou",       "shape",
-                                       "dilation_px",     "motion_levels", "dynamic_levels"};
+  static const char* const kKnown[] = {
+      "model",          "input_width",   "input_height",       "score_threshold",
+      "nms_iou",        "shape",         "dilation_px",        "motion_levels",
+      "dynamic_levels", "depth_segment", "object_half_depth_m"};
   for (const auto& entry : node) {
     const std::string key = entry.first.as<std::string>();
     if (std::find(std::begin(kKnown), std::end(kKnown), key) == std::end(kKnown)) {
@@ -34,6 +35,8 @@ DynamicConfig DynamicConfigFromYaml(const YAML::Node& root, const std::filesyste
   io::ReadSetting(node, "score_threshold", name, config.detector.score_threshold);
   io::ReadSetting(node, "nms_iou", name, config.detector.nms_iou);
   io::ReadSetting(node, "dilation_px", name, config.mask.dilation_px);
+  io::ReadSetting(node, "depth_segment", name, config.mask.depth_segment);
+  io::ReadSetting(node, "object_half_depth_m", name, config.mask.object_half_depth_m);
   std::string shape;
   if (io::ReadSetting(node, "shape", name, shape)) {
     if (shape == "box") {

@@ -28,6 +28,8 @@ TEST(DynamicConfigFromYaml, ReadsEveryKeyAndResolvesTheModelBesideTheFile) {
                                        "  nms_iou: 0.5\n"
                                        "  shape: box\n"
                                        "  dilation_px: 2\n"
+                                       "  depth_segment: false\n"
+                                       "  object_half_depth_m: 0.5\n"
                                        "  motion_levels: {chair: high}\n"
                                        "  dynamic_levels: [high, medium]\n"),
                             "/settings/fr3.yaml");
@@ -38,6 +40,8 @@ TEST(DynamicConfigFromYaml, ReadsEveryKeyAndResolvesTheModelBesideTheFile) {
   EXPECT_FLOAT_EQ(config.detector.nms_iou, 0.5f);
   EXPECT_EQ(config.mask.shape, RegionShape::kBox);
   EXPECT_EQ(config.mask.dilation_px, 2);
+  EXPECT_FALSE(config.mask.depth_segment);
+  EXPECT_DOUBLE_EQ(config.mask.object_half_depth_m, 0.5);
   EXPECT_EQ(config.motion_levels.Level(CocoClassId("chair")), MotionLevel::kHigh);
   EXPECT_EQ(config.mask.dynamic_levels,
             (std::set<MotionLevel>{MotionLevel::kHigh, MotionLevel::kMedium}));

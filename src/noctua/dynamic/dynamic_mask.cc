@@ -1,6 +1,8 @@
 #include "noctua/dynamic/dynamic_mask.h"
 
+#include <algorithm>
 #include <opencv2/imgproc.hpp>
+#include <vector>
 
 #include "noctua/util/error.h"
 
@@ -9,33 +11,136 @@ namespace noctua::dynamic {
 void DynamicMaskOptions::Check() const {
   CheckOption(dilation_px >= 0 && dilation_px <= 100,
               "dynamic mask dilation_px must be in [0, 100]");
+  CheckOption(object_half_depth_m > 0.0 && object_half_depth_m <= 5.0,
+              "dynamic mask object_half_depth_m must be in (0, 5]");
 }
 
-cv::Mat BuildDynamicMask(const std::vector<Detection>& detections, const MotionLevelTable& table,
-                         const DynamicMaskOptions& options, cv::Size size) {
+double DepthNoiseSigma(double z_m) { return 0.0012 + 0.0019 * (z_m - 0.4) * (z_m - 0.4); }
+
+namespace {
+
+// The q-quantile of the valid (positive) depths of `depth_m` under `where` (CV_8U); 0 when none.
+double DepthQuantile(const cv::Mat& depth_m, const cv::Mat& where, double q) {
+  std::vector<float> values;
+  for (int y = 0; y < depth_m.rows; ++y) {
+    const float* d = depth_m.ptr<float>(y);
+    const uchar* w = where.ptr<uchar>(y);
+    for (int x = 0; x < depth_m.cols; ++x) {
+      if (w[x] != 0 && d[x] > 0.0f) values.push_back(d[x]);
+    }
+  }
+  if (values.empty()) return 0.0;
+  const auto nth = values.begin() + static_cast<std::ptrdiff_t>(q * (values.size() - 1));
+  std::nth_element(values.begin(), nth, values.end());
+  return *nth;
+}
+
+cv::Rect BoxPixels(const Detection& detection, cv::Size size) {
+  return cv::Rect(cv::Point(cvFloor(detection.box.x), cvFloor(detection.box.y)),
+                  cv::Point(cvCeil(detection.box.br().x), cvCeil(detection.box.br().y))) &
+         cv::Rect(cv::Point(), size);
+}
+
+}  // namespace
+
+double ObjectDepth(const Detection& detection, const cv::Mat& depth_m) {
+  if (depth_m.empty()) return 0.0;
+  if (depth_m.type() != CV_32FC1) {
+    throw Error("dynamic mask: the depth image must be CV_32F metres");
+  }
+  if (!detection.mask.empty()) return DepthQuantile(depth_m, detection.mask, 0.5);
+  const cv::Rect box = BoxPixels(detection, depth_m.size());
+  const cv::Rect middle(box.x + box.width / 3, box.y + box.height / 5, std::max(1, box.width / 3),
+                        std::max(1, box.height * 3 / 5));
+  cv::Mat where = cv::Mat::zeros(depth_m.size(), CV_8U);
+  where(middle & box).setTo(255);
+  return DepthQuantile(depth_m, where, 0.25);
+}
+
+cv::Mat DepthSegment(const cv::Mat& region, double object_depth_m, const cv::Mat& depth_m,
+                     double object_half_depth_m) {
+  if (depth_m.type() != CV_32FC1 || depth_m.size() != region.size()) {
+    throw Error("dynamic mask: the depth image must be CV_32F metres of the frame's size");
+  }
+  if (object_depth_m <= 0.0) return region.clone();
+  const double tolerance = object_half_depth_m + 3.0 * DepthNoiseSigma(object_depth_m);
+  cv::Mat near_object, no_depth;
+  cv::inRange(depth_m, object_depth_m - tolerance, object_depth_m + tolerance, near_object);
+  cv::compare(depth_m, 0.0, no_depth, cv::CMP_LE);
+  return region & (near_object | no_depth);
+}
+
+std::vector<DynamicObject> FindDynamicObjects(const std::vector<Detection>& detections,
+                                              const MotionLevelTable& table,
+                                              const DynamicMaskOptions& options, cv::Size size,
+                                              const cv::Mat& depth_m) {
   options.Check();
-  cv::Mat mask = cv::Mat::zeros(size, CV_8U);
-  const cv::Rect frame(cv::Point(), size);
+  if (!depth_m.empty() && depth_m.size() != size) {
+    throw Error("dynamic mask: the depth image is not of the frame's size");
+  }
+  std::vector<DynamicObject> objects;
   for (const Detection& detection : detections) {
     if (options.dynamic_levels.count(table.Level(detection.class_id)) == 0) continue;
-    if (options.shape == RegionShape::kInstance && !detection.mask.empty()) {
-      if (detection.mask.size() != size || detection.mask.type() != CV_8U) {
-        throw Error("dynamic mask: an instance mask does not match the frame size");
+    DynamicObject object;
+    object.detection = detection;
+    if (options.shape != RegionShape::kInstance) object.detection.mask = cv::Mat();
+    const cv::Mat& instance = object.detection.mask;
+    if (!instance.empty() && (instance.size() != size || instance.type() != CV_8U)) {
+      throw Error("dynamic mask: an instance mask does not match the frame size");
+    }
+    if (options.depth_segment) object.depth_m = ObjectDepth(object.detection, depth_m);
+    objects.push_back(std::move(object));
+  }
+  return objects;
+}
+
+cv::Mat DynamicObjectsMask(const std::vector<DynamicObject>& objects,
+                           const DynamicMaskOptions& options, cv::Size size, const cv::Mat& depth_m,
+                           int grow_px) {
+  options.Check();
+  const bool segment = options.depth_segment && !depth_m.empty();
+  cv::Mat mask = cv::Mat::zeros(size, CV_8U);
+  for (const DynamicObject& object : objects) {
+    const Detection& detection = object.detection;
+    cv::Rect box = BoxPixels(detection, size);
+    box = cv::Rect(box.x - grow_px, box.y - grow_px, box.width + 2 * grow_px,
+                   box.height + 2 * grow_px) &
+          cv::Rect(cv::Point(), size);
+    const cv::Mat& instance = detection.mask;
+    if (!segment || object.depth_m <= 0.0) {
+      if (instance.empty()) {
+        mask(box).setTo(255);
+      } else if (grow_px == 0) {
+        mask |= instance;
+      } else {
+        // A square, not a disc: separable, under 1 ms where an 81-pixel disc costs 30 ms.
+        cv::Mat grown;
+        cv::dilate(
+            instance, grown,
+            cv::getStructuringElement(cv::MORPH_RECT, cv::Size(2 * grow_px + 1, 2 * grow_px + 1)));
+        mask |= grown;
       }
-      mask.setTo(255, detection.mask);
       continue;
     }
-    const cv::Rect box =
-        cv::Rect(cv::Point(cvFloor(detection.box.x), cvFloor(detection.box.y)),
-                 cv::Point(cvCeil(detection.box.br().x), cvCeil(detection.box.br().y))) &
-        frame;
-    mask(box).setTo(255);
+    // The box cut to the object's depth segment. An instance mask misses the object's fringe (it
+    // comes from a coarse prototype grid), so the segment extends it; once the object has moved
+    // on (grow_px > 0), the old instance mask says no more than the segment.
+    cv::Mat region = cv::Mat::zeros(size, CV_8U);
+    region(box).setTo(255);
+    mask |= DepthSegment(region, object.depth_m, depth_m, options.object_half_depth_m);
+    if (!instance.empty() && grow_px == 0) mask |= instance;
   }
   if (options.dilation_px > 0) {
     const int k = 2 * options.dilation_px + 1;
     cv::dilate(mask, mask, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(k, k)));
   }
   return mask;
+}
+
+cv::Mat BuildDynamicMask(const std::vector<Detection>& detections, const MotionLevelTable& table,
+                         const DynamicMaskOptions& options, cv::Size size, const cv::Mat& depth_m) {
+  return DynamicObjectsMask(FindDynamicObjects(detections, table, options, size, depth_m), options,
+                            size, depth_m);
 }
 
 cv::Mat LargestInstanceMask(const std::vector<Detection>& detections, int class_id) {

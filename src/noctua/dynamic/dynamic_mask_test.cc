@@ -39,6 +39,49 @@ Detection Box(int class_id, float x, float y, float w, float h) {
   return detection;
 }
 
+// A generated RGB-D view with a known answer: a wall at 4 m, a "person" at 1.5 m standing in
+// front of it, a patch without depth on the person, and the person's detection box reaching past
+// them over the wall. Cut to depth, the region is the person and the unknown patch, not the wall.
+TEST(DepthSegment, CutsABoxToThePersonsDepthAndFollowsACarriedPerson) {
+  const cv::Size size(640, 480);
+  const cv::Rect person(200, 100, 120, 370);
+  const auto depth_with_person_at = [&](int dx) {
+    cv::Mat depth(size, CV_32F, cv::Scalar(4.0f));
+    depth(person + cv::Point(dx, 0)).setTo(1.5f);
+    depth(cv::Rect(240 + dx, 200, 20, 20)).setTo(0.0f);  // no reading
+    return depth;
+  };
+  const cv::Mat depth = depth_with_person_at(0);
+  const std::vector<Detection> detections = {Box(0, 160, 60, 200, 420)};  // a person's box
+  const MotionLevelTable table;
+  DynamicMaskOptions options;
+  options.dilation_px = 0;
+
+  const cv::Mat boxes = BuildDynamicMask(detections, table, options, size);
+  EXPECT_EQ(cv::countNonZero(boxes), 200 * 420);
+  const auto objects = FindDynamicObjects(detections, table, options, size, depth);
+  ASSERT_EQ(objects.size(), 1u);
+  EXPECT_NEAR(objects[0].depth_m, 1.5, 1e-6);
+  const cv::Mat cut = BuildDynamicMask(detections, table, options, size, depth);
+  cv::Mat expected = cv::Mat::zeros(size, CV_8U);
+  expected(person).setTo(255);
+  EXPECT_EQ(cv::countNonZero(cut != expected), 0);
+
+  // Two frames later the person has moved 15 px right; the box detected then, grown by 20 px,
+  // cut to this frame's depth, covers the person where they are now and still no wall.
+  const cv::Mat later = depth_with_person_at(15);
+  const cv::Mat carried = DynamicObjectsMask(objects, options, size, later, 20);
+  cv::Mat moved = cv::Mat::zeros(size, CV_8U);
+  moved(person + cv::Point(15, 0)).setTo(255);
+  EXPECT_EQ(cv::countNonZero(carried != moved), 0);
+
+  // Off, or without depth, the box stays whole.
+  options.depth_segment = false;
+  EXPECT_EQ(cv::countNonZero(BuildDynamicMask(detections, table, options, size, depth)), 200 * 420);
+  // The tolerance follows the sensor's noise: wider far away.
+  EXPECT_GT(DepthNoiseSigma(4.0), 5 * DepthNoiseSigma(1.0));
+}
+
 TEST(LargestInstanceMask, PicksTheLargestMaskOfTheClassOnly) {
   const cv::Size size(64, 48);
   auto with_mask = [&](int class_id, cv::Rect region) {

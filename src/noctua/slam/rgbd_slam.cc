@@ -168,7 +168,7 @@ SequenceRun RunSequence(const io::Sequence& sequence, double depth_factor,
       loaded.images.bgr = run_options.transform_image(i, loaded.images.bgr);
     }
     loaded.load_ms = watch.ElapsedMs();
-    if (run_options.lookahead) run_options.lookahead(loaded.images.bgr);
+    if (run_options.lookahead) run_options.lookahead(loaded.images.bgr, loaded.images.depth_m);
     return loaded;
   };
   const auto extract = [&](LoadedFrame loaded) {

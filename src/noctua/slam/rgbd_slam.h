@@ -105,7 +105,8 @@ struct RunOptions {
   // a thread of their own (pipeline::FeatureMethod::detection_ahead) early enough that the
   // extraction finds the mask ready (frames are loaded that much ahead; overlapped, the loader
   // may be less far ahead when it is the slower side, never further).
-  std::function<void(const cv::Mat&)> lookahead;
+  // The frame's depth (CV_32F metres) comes with it, e.g. to cut dynamic regions to depth.
+  std::function<void(const cv::Mat& bgr, const cv::Mat& depth_m)> lookahead;
   int lookahead_frames = 3;
 };
 

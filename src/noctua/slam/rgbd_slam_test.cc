@@ -10,6 +10,7 @@
 
 #include "noctua/eval/trajectory_error.h"
 #include "noctua/features/extractor_config.h"
+#include "noctua/io/camera_config.h"
 #include "noctua/pipeline/method.h"
 #include "noctua/slam/map.h"
 #include "noctua/testing/shared_data.h"
@@ -163,7 +164,7 @@ TEST_F(RgbdSlamTest, LookaheadSeesEveryFrameInOrderAheadOfItsExtraction) {
     options.max_frames = frames;
     options.overlap_extraction = overlap;
     options.lookahead_frames = 2;
-    options.lookahead = [&](const cv::Mat& image) {
+    options.lookahead = [&](const cv::Mat& image, const cv::Mat&) {
       std::lock_guard lock(events_mutex);
       events.push_back("ahead " + RecordingFeature2D::Signature(image));
     };
@@ -201,7 +202,7 @@ TEST_F(RgbdSlamTest, LookaheadSeesEveryFrameInOrderAheadOfItsExtraction) {
     }
   }
   RunOptions bad;
-  bad.lookahead = [](const cv::Mat&) {};
+  bad.lookahead = [](const cv::Mat&, const cv::Mat&) {};
   bad.lookahead_frames = 0;
   EXPECT_THAT(
       [&] {
@@ -316,6 +317,42 @@ TEST_F(RgbdSlamTest, BadConfigAndBadDataFailClearly) {
   SlamOptions bad = setup_->options;
   bad.scale_factor = 1.0;
   EXPECT_THROW(RgbdSlam(setup_->camera.Camera(), Orb(*setup_), bad), Error);
+}
+
+// A real crowd: bonn_crowd_120's people cover most of the view around frames 35-47, where their
+// boxes leave no static pixel. With YOLOv8n detecting ahead (every 3rd frame) and each box cut to
+// its person's depth segment, `orb` keeps every one of the first 60 frames (measured ATE 0.016 m
+// against the camera poses of the Bonn convention; bound 0.05 m, loose because one run scatters);
+// with whole boxes, frames are lost there.
+TEST(RgbdSlamCrowd, KeepsEveryFrameOfTheBonnCrowdWithDepthCutDetections) {
+  const io::CameraConfig camera = io::ReadCameraConfig(kConfigDir / "bonn.yaml");
+  const io::Sequence sequence = io::Sequence::Open(
+      testing::DataDir() / "bonn_crowd_120", {.ground_truth_convention = camera.ground_truth});
+  const SlamSetup setup = LoadSlamSetup(kConfigDir / "bonn.yaml");
+  const auto run = [&](bool depth_segment) {
+    pipeline::MethodConfig config;
+    config.extractor = features::LoadExtractorOptions(kConfigDir / "bonn.yaml");
+    config.detector_model = (testing::ModelsDir() / "yolov8n" / "yolov8n_head_f32.onnx").string();
+    config.detect_ahead = true;
+    config.dynamic_mask.depth_segment = depth_segment;
+    const auto method = pipeline::CreateMethod("orb", config);
+    RunOptions options;
+    options.max_frames = 60;
+    options.lookahead = [masks = method->detection_ahead()](const cv::Mat& bgr,
+                                                            const cv::Mat& depth_m) {
+      masks->Submit(bgr, depth_m);
+    };
+    return RunSequence(sequence, setup.camera.depth_factor, setup.camera.Camera(),
+                       method->feature2d(), setup.options, options);
+  };
+  const SequenceRun cut = run(true);
+  ASSERT_EQ(cut.frames.size(), 60u);
+  EXPECT_TRUE(cut.lost_frames.empty()) << cut.lost_frames.size() << " frames lost";
+  const eval::AteResult ate = eval::ComputeAte(sequence.ground_truth(), cut.trajectory);
+  EXPECT_EQ(ate.translation_m.count, 60);
+  EXPECT_LT(ate.translation_m.rmse, 0.05);
+  const SequenceRun boxes = run(false);
+  EXPECT_FALSE(boxes.lost_frames.empty());
 }
 
 }  // namespace
