@@ -390,14 +390,19 @@ TEST_F(CliTest, SlamReportsMemoryAndMapSize) {
     last = line;
   }
   EXPECT_EQ(rows, 12);
-  // The last row's map size is the report's: columns 8 and 9 (keyframes, map_points).
+  // The last row's map size is the report's: columns 9 and 10 (keyframes, map_points); a tracked
+  // frame's confidence in columns 6 and 7 (position sigma in mm, rotation sigma in degrees).
   std::vector<std::string> cells;
   std::stringstream cells_in(last);
   for (std::string cell; std::getline(cells_in, cell, ',');) cells.push_back(cell);
-  ASSERT_GT(cells.size(), 9u);
-  EXPECT_EQ(std::stoi(cells[7]), report["keyframes"].get<int>());
-  EXPECT_EQ(std::stoi(cells[8]), report["map_points"].get<int>());
-  EXPECT_GT(std::stod(cells[9]), 10.0);
+  ASSERT_GT(cells.size(), 11u);
+  EXPECT_EQ(cells[2], "ok");
+  EXPECT_GT(std::stod(cells[6]), 0.0);
+  EXPECT_LT(std::stod(cells[6]), 20.0);
+  EXPECT_GT(std::stod(cells[7]), 0.0);
+  EXPECT_EQ(std::stoi(cells[9]), report["keyframes"].get<int>());
+  EXPECT_EQ(std::stoi(cells[10]), report["map_points"].get<int>());
+  EXPECT_GT(std::stod(cells[11]), 10.0);
 }
 
 // With a detector, the SLAM detects on a thread of its own every N-th frame by default, says so in

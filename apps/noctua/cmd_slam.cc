@@ -1,3 +1,4 @@
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <iostream>
@@ -65,6 +66,8 @@ const char* StateName(slam::TrackingState state) {
       return "not-initialised";
     case slam::TrackingState::kOk:
       return "ok";
+    case slam::TrackingState::kCoasting:
+      return "coasting";
     case slam::TrackingState::kLost:
       return "lost";
   }
@@ -76,14 +79,22 @@ const char* StateName(slam::TrackingState state) {
 std::string FramesCsv(const slam::SequenceRun& run, const std::vector<std::string>& stages,
                       const std::vector<double>& rss_mb) {
   std::string csv =
-      "frame,timestamp,state,method,keypoints,inliers,keyframe,keyframes,map_points,rss_mb";
+      "frame,timestamp,state,method,keypoints,inliers,position_sigma_mm,rotation_sigma_deg,"
+      "keyframe,keyframes,map_points,rss_mb";
   for (const auto& stage : stages) csv += "," + stage + "_ms";
   csv += "\n";
-  char buffer[128];
+  char buffer[192];
   for (std::size_t i = 0; i < run.frames.size(); ++i) {
     const slam::FrameOutcome& f = run.frames[i];
-    std::snprintf(buffer, sizeof(buffer), "%zu,%.6f,%s,%s,%d,%d,%d,%d,%d,%.1f", i, f.timestamp,
-                  StateName(f.state), f.method.c_str(), f.keypoints, f.inliers,
+    // A frame without a pose has no confidence: its sigma columns stay empty.
+    const bool posed = std::isfinite(f.position_sigma_m);
+    char sigma[64] = ",";
+    if (posed) {
+      std::snprintf(sigma, sizeof(sigma), "%.2f,%.3f", 1000.0 * f.position_sigma_m,
+                    f.rotation_sigma_deg);
+    }
+    std::snprintf(buffer, sizeof(buffer), "%zu,%.6f,%s,%s,%d,%d,%s,%d,%d,%d,%.1f", i, f.timestamp,
+                  StateName(f.state), f.method.c_str(), f.keypoints, f.inliers, sigma,
                   f.new_keyframe ? 1 : 0, f.keyframes, f.map_points,
                   i < rss_mb.size() ? rss_mb[i] : 0.0);
     csv += buffer;
@@ -163,6 +174,8 @@ void RunSlam(const SlamArguments& args) {
   report["tracked_frames"] = run.trajectory.size();
   report["lost_frames"] = run.lost_frames.size();
   report["lost_frame_indices"] = run.lost_frames;
+  report["coasted_frames"] = run.coasted_frames.size();
+  report["coasted_frame_indices"] = run.coasted_frames;
   report["keyframes"] = run.keyframes;
   report["map_points"] = run.map_points;
   report["interrupted"] = run.interrupted;
@@ -205,13 +218,14 @@ void RunSlam(const SlamArguments& args) {
     markdown += row;
   }
   char counts[320];
-  std::snprintf(counts, sizeof(counts),
-                "\nframes %zu, tracked %zu, lost %zu, keyframes %d, map points %d, peak RSS "
-                "%.1f MB\n"
-                "%.1f frames/s (%.2f s for the run, loading included, %s)\n",
-                run.frames.size(), run.trajectory.size(), run.lost_frames.size(), run.keyframes,
-                run.map_points, PeakResidentMemoryMb(), run.FramesPerSecond(), run.wall_s,
-                args.sequential ? "sequential" : "extraction overlapped with tracking");
+  std::snprintf(
+      counts, sizeof(counts),
+      "\nframes %zu, with a pose %zu (coasting %zu), lost %zu, keyframes %d, map points %d, "
+      "peak RSS %.1f MB\n"
+      "%.1f frames/s (%.2f s for the run, loading included, %s)\n",
+      run.frames.size(), run.trajectory.size(), run.coasted_frames.size(), run.lost_frames.size(),
+      run.keyframes, run.map_points, PeakResidentMemoryMb(), run.FramesPerSecond(), run.wall_s,
+      args.sequential ? "sequential" : "extraction overlapped with tracking");
   markdown += counts;
   if (sequence.has_ground_truth() && run.trajectory.size() >= 3) {
     const eval::AteResult ate = eval::ComputeAte(sequence.ground_truth(), run.trajectory);

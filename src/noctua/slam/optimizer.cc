@@ -2,6 +2,7 @@
 
 #include <ceres/ceres.h>
 
+#include <Eigen/Dense>
 #include <array>
 #include <cmath>
 #include <limits>
@@ -66,6 +67,49 @@ ceres::Solver::Options SolverOptions(int iterations, ceres::LinearSolverType sol
 }
 
 }  // namespace
+
+PoseUncertainty EstimatePoseUncertainty(const Frame& frame, const ScalePyramid& pyramid,
+                                        double bf) {
+  const FrameFeatures& features = *frame.features;
+  const Intrinsics k = IntrinsicsOf(features, bf);
+  // Information of the twist δ = (ω, v) that moves the camera-frame points, p' = Exp(δ) p:
+  // ∂p/∂ω = -[p]x, ∂p/∂v = I. Moving the points by v moves the camera centre by -Rᵀv, so v's
+  // covariance is the position's, in camera axes.
+  Eigen::Matrix<double, 6, 6> information = Eigen::Matrix<double, 6, 6>::Zero();
+  for (int i = 0; i < frame.size(); ++i) {
+    const MapPoint* point = frame.map_points[static_cast<std::size_t>(i)];
+    if (point == nullptr || point->bad() || frame.outlier[static_cast<std::size_t>(i)]) continue;
+    const Eigen::Vector3d p = frame.pose_cw * point->position();
+    if (p.z() <= 0.0) continue;
+    const Observation o = ObservationOf(features, i, pyramid);
+    const double inverse_z = 1.0 / p.z();
+    Eigen::Matrix<double, 3, 3> d_residual_d_p;
+    d_residual_d_p << k.fx * inverse_z, 0.0, -k.fx * p.x() * inverse_z * inverse_z,  //
+        0.0, k.fy * inverse_z, -k.fy * p.y() * inverse_z * inverse_z,                //
+        0.0, 0.0, -k.bf * inverse_z * inverse_z;
+    Eigen::Matrix<double, 3, 6> d_p_d_twist;
+    d_p_d_twist.leftCols<3>() << 0.0, p.z(), -p.y(),  //
+        -p.z(), 0.0, p.x(),                           //
+        p.y(), -p.x(), 0.0;
+    d_p_d_twist.rightCols<3>().setIdentity();
+    const int rows = o.stereo ? 3 : 2;
+    const Eigen::MatrixXd jacobian = o.inverse_sigma * d_residual_d_p.topRows(rows) * d_p_d_twist;
+    information += jacobian.transpose() * jacobian;
+  }
+  PoseUncertainty uncertainty;
+  const Eigen::FullPivLU<Eigen::Matrix<double, 6, 6>> lu(information);
+  if (!lu.isInvertible()) return uncertainty;
+  const Eigen::Matrix<double, 6, 6> covariance = lu.inverse();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> position(
+      covariance.bottomRightCorner<3, 3>());
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> rotation(covariance.topLeftCorner<3, 3>());
+  if (position.eigenvalues().maxCoeff() < 0.0 || rotation.eigenvalues().maxCoeff() < 0.0) {
+    return uncertainty;
+  }
+  uncertainty.position_sigma_m = std::sqrt(position.eigenvalues().maxCoeff());
+  uncertainty.rotation_sigma_deg = std::sqrt(rotation.eigenvalues().maxCoeff()) * 180.0 / M_PI;
+  return uncertainty;
+}
 
 int OptimizePose(Frame& frame, const ScalePyramid& pyramid, double bf) {
   const FrameFeatures& features = *frame.features;

@@ -1,5 +1,7 @@
 #pragma once
 
+#include <limits>
+
 #include "noctua/slam/frame.h"
 #include "noctua/slam/map.h"
 #include "noctua/slam/slam_options.h"
@@ -16,6 +18,18 @@ inline constexpr double kChi2Stereo = 7.815;
 // out of the next round, and earlier outliers that fit again come back (ORB-SLAM's scheme; the
 // last round is without the robust loss). Returns the number of inliers.
 int OptimizePose(Frame& frame, const ScalePyramid& pyramid, double bf);
+
+// How well a tracked pose is determined by its inlier matches: the marginal standard deviations
+// of the camera's position and orientation, from the Gauss-Newton information J^T J of the
+// inliers' residuals (each weighted by its keypoint's level, so a level-0 pixel error counts as
+// one sigma). This is the frame's confidence: a pose fixed by 20 points spread over the view can
+// be surer than one from 200 points on one side of it. Infinite when the matches do not fix all
+// six degrees of freedom.
+struct PoseUncertainty {
+  double position_sigma_m = std::numeric_limits<double>::infinity();
+  double rotation_sigma_deg = std::numeric_limits<double>::infinity();
+};
+PoseUncertainty EstimatePoseUncertainty(const Frame& frame, const ScalePyramid& pyramid, double bf);
 
 // Local bundle adjustment around `keyframe` (Ceres, Huber loss): the keyframe and its covisible
 // keyframes (at most `max_covisibles`, the most covisible first; 0: all) and all their points are

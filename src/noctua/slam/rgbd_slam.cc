@@ -218,6 +218,8 @@ SequenceRun RunSequence(const io::Sequence& sequence, double depth_factor,
     outcome.state = result.state;
     outcome.method = result.method;
     outcome.inliers = result.inliers;
+    outcome.position_sigma_m = result.position_sigma_m;
+    outcome.rotation_sigma_deg = result.rotation_sigma_deg;
     outcome.new_keyframe = result.new_keyframe;
     outcome.stage_ms = result.stage_ms;
     outcome.stage_ms["load"] = prepared.load_ms;
@@ -226,7 +228,11 @@ SequenceRun RunSequence(const io::Sequence& sequence, double depth_factor,
     outcome.keyframes = slam.tracker().map().NumKeyFrames();
     outcome.map_points = slam.tracker().map().NumMapPoints();
     if (result.state != TrackingState::kNotInitialised) started = true;
-    if (started && result.state != TrackingState::kOk) run.lost_frames.push_back(i);
+    if (started && result.state == TrackingState::kCoasting) run.coasted_frames.push_back(i);
+    if (started &&
+        (result.state == TrackingState::kLost || result.state == TrackingState::kNotInitialised)) {
+      run.lost_frames.push_back(i);
+    }
     run.frames.push_back(outcome);
     if (run_options.progress) run_options.progress(i, count, run.frames.back());
   }

@@ -58,6 +58,8 @@ struct FrameOutcome {
   std::string method;
   int keypoints = 0;
   int inliers = 0;
+  double position_sigma_m = 0.0;  // the pose's confidence (TrackResult); infinite without pose
+  double rotation_sigma_deg = 0.0;
   bool new_keyframe = false;
   int keyframes = 0;   // map size after this frame
   int map_points = 0;  // (so memory can be set against it over a long run)
@@ -69,7 +71,10 @@ struct FrameOutcome {
 struct SequenceRun {
   std::vector<FrameOutcome> frames;
   io::Trajectory trajectory;     // tracked frames, T_world_camera
-  std::vector<int> lost_frames;  // indices of frames not tracked after the map was started
+  std::vector<int> lost_frames;  // indices of frames without a pose after the map was started
+  // Indices of frames not tracked but given the motion model's pose (TrackingState::kCoasting):
+  // they are in the trajectory, with their confidence in `frames`.
+  std::vector<int> coasted_frames;
   int keyframes = 0;
   int map_points = 0;
   // Culled keyframes stay allocated (their pose only: frames refer to them); culled points are

@@ -212,18 +212,34 @@ TEST_F(RgbdSlamTest, LookaheadSeesEveryFrameInOrderAheadOfItsExtraction) {
       ::testing::ThrowsMessage<Error>(HasSubstr("lookahead_frames")));
 }
 
+// Twenty black frames: the first max_coasting_frames (10) get the motion model's pose, marked
+// as coasting with a confidence that worsens frame by frame; the rest have no pose; the first
+// frame after the stretch relocalises.
 TEST_F(RgbdSlamTest, RecoversAfterTwentyBlackFrames) {
   const SequenceRun run = Run(90, [](int index, const cv::Mat& image) {
     return index >= 40 && index < 60 ? cv::Mat(image.size(), image.type(), cv::Scalar::all(0))
                                      : image;
   });
-  ASSERT_EQ(run.lost_frames.size(), 20u);
-  EXPECT_EQ(run.lost_frames.front(), 40);
+  const int coasting = SlamOptions().max_coasting_frames;
+  ASSERT_EQ(coasting, 10);
+  ASSERT_EQ(run.coasted_frames.size(), 10u);
+  EXPECT_EQ(run.coasted_frames.front(), 40);
+  EXPECT_EQ(run.coasted_frames.back(), 49);
+  for (int i = 41; i < 50; ++i) {
+    const FrameOutcome& frame = run.frames[static_cast<std::size_t>(i)];
+    EXPECT_EQ(frame.state, TrackingState::kCoasting) << i;
+    EXPECT_GT(frame.position_sigma_m, run.frames[static_cast<std::size_t>(i - 1)].position_sigma_m);
+  }
+  ASSERT_EQ(run.lost_frames.size(), 10u);
+  EXPECT_EQ(run.lost_frames.front(), 50);
   EXPECT_EQ(run.lost_frames.back(), 59);
   for (int i = 60; i < 90; ++i)
     EXPECT_EQ(run.frames[static_cast<std::size_t>(i)].state, TrackingState::kOk) << i;
   EXPECT_EQ(run.frames[60].method, "relocalisation");
-  EXPECT_EQ(run.trajectory.size(), 70u);
+  EXPECT_EQ(run.trajectory.size(), 80u);
+  // A tracked frame is surer than any coasted one.
+  EXPECT_LT(run.frames[39].position_sigma_m, run.frames[40].position_sigma_m);
+  EXPECT_LT(run.frames[70].position_sigma_m, 0.02);
   const eval::AteResult ate = eval::ComputeAte(sequence_->ground_truth(), run.trajectory);
   EXPECT_LT(ate.translation_m.rmse, 0.09);
 }

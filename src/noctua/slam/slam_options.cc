@@ -13,6 +13,10 @@ void SlamOptions::Check() const {
   CheckOption(min_depth_m >= 0.0, "slam: min_depth_m must not be negative");
   CheckOption(min_initial_points >= 10, "slam: min_initial_points must be at least 10");
   CheckOption(min_tracked_inliers >= 10, "slam: min_tracked_inliers must be at least 10");
+  CheckOption(min_certain_inliers >= 6 && min_certain_inliers <= min_tracked_inliers,
+              "slam: min_certain_inliers must be in [6, min_tracked_inliers]");
+  CheckOption(certain_sigma_ratio >= 0.0, "slam: certain_sigma_ratio must not be negative");
+  CheckOption(max_coasting_frames >= 0, "slam: max_coasting_frames must not be negative");
   CheckOption(min_inliers_after_relocalisation >= min_tracked_inliers,
               "slam: min_inliers_after_relocalisation must be at least min_tracked_inliers");
   CheckOption(max_frames_between_keyframes >= 1, "slam: max_frames_between_keyframes must be >= 1");

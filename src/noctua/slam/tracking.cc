@@ -31,6 +31,7 @@ TrackResult Tracker::Track(Frame frame) {
     result.method = ok ? "init" : "";
     result.new_keyframe = ok;
     result.inliers = ok ? current_->features->CountWithDepth() : 0;
+    if (ok) result.position_sigma_m = result.rotation_sigma_deg = 0.0;  // the map's origin
     result.stage_ms["track"] = watch.ElapsedMs();
   } else {
     if (state_ == TrackingState::kOk) {
@@ -56,7 +57,15 @@ TrackResult Tracker::Track(Frame frame) {
     watch.Restart();
     state_ = ok ? TrackingState::kOk : TrackingState::kLost;
     result.state = state_;
+    if (ok) coasting_velocity_ = velocity_;
     result.inliers = ok ? inliers_ : 0;
+    if (ok) {
+      result.position_sigma_m = uncertainty_.position_sigma_m;
+      result.rotation_sigma_deg = uncertainty_.rotation_sigma_deg;
+      recent_uncertainty_.push_back(uncertainty_);
+      constexpr std::size_t kRecentFrames = 30;
+      if (recent_uncertainty_.size() > kRecentFrames) recent_uncertainty_.pop_front();
+    }
     if (!ok) result.method.clear();
     if (ok) {
       // A velocity only between consecutive tracked frames; after a loss, none.
@@ -91,7 +100,8 @@ TrackResult Tracker::Track(Frame frame) {
   FrameRecord record;
   record.frame_id = current_->id;
   record.timestamp = current_->timestamp;
-  if (ok && reference_ != nullptr) {
+  const bool coasted = !ok && state_ == TrackingState::kLost && Coast(result);
+  if ((ok || coasted) && reference_ != nullptr) {
     record.reference = reference_;
     record.pose_c_r = current_->pose_cw * reference_->pose_cw().inverse();
   }
@@ -102,6 +112,23 @@ TrackResult Tracker::Track(Frame frame) {
   // Points are culled only while a keyframe is mapped.
   if (result.new_keyframe) ReclaimMapPoints();
   return result;
+}
+
+bool Tracker::Coast(TrackResult& result) {
+  if (!coasting_velocity_ || last_ == nullptr || reference_ == nullptr) return false;
+  const long steps = current_->id - last_->id;
+  if (steps < 1 || steps > options_.max_coasting_frames) return false;
+  geometry::Pose pose = last_->pose_cw;
+  for (long k = 0; k < steps; ++k) pose = *coasting_velocity_ * pose;
+  current_->pose_cw = pose;
+  result.state = TrackingState::kCoasting;
+  result.method = "coasting";
+  // No measurement fixes this pose: its sigma is the distance the camera moved while coasting,
+  // which the prediction's error is a fraction of.
+  result.position_sigma_m = static_cast<double>(steps) * coasting_velocity_->translation().norm();
+  result.rotation_sigma_deg =
+      static_cast<double>(steps) * geometry::RotationAngle(*coasting_velocity_) * 180.0 / M_PI;
+  return true;
 }
 
 void Tracker::ReclaimMapPoints() {
@@ -410,11 +437,31 @@ bool Tracker::TrackLocalMap() {
       frame.outlier[i] = false;
     }
   }
+  uncertainty_ = EstimatePoseUncertainty(frame, pyramid_, options_.bf);
   if (frame.id < last_relocalisation_frame_id_ + options_.max_frames_between_keyframes &&
       inliers_ < options_.min_inliers_after_relocalisation) {
     return false;
   }
-  return inliers_ >= options_.min_tracked_inliers;
+  if (inliers_ >= options_.min_tracked_inliers) return true;
+  // Fewer inliers than usual, as where people cover most of the view: the pose stands when the
+  // few static points that remain still fix it as well as a normal frame's do.
+  return inliers_ >= options_.min_certain_inliers && AsCertainAsRecentFrames();
+}
+
+bool Tracker::AsCertainAsRecentFrames() const {
+  if (recent_uncertainty_.size() < 5) return false;
+  std::vector<double> position, rotation;
+  for (const PoseUncertainty& u : recent_uncertainty_) {
+    position.push_back(u.position_sigma_m);
+    rotation.push_back(u.rotation_sigma_deg);
+  }
+  const auto median = [](std::vector<double>& values) {
+    const auto middle = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
+    std::nth_element(values.begin(), middle, values.end());
+    return *middle;
+  };
+  return uncertainty_.position_sigma_m <= options_.certain_sigma_ratio * median(position) &&
+         uncertainty_.rotation_sigma_deg <= options_.certain_sigma_ratio * median(rotation);
 }
 
 bool Tracker::NeedNewKeyFrame() const {

@@ -1,5 +1,7 @@
 #pragma once
 
+#include <deque>
+#include <limits>
 #include <map>
 #include <memory>
 #include <optional>
@@ -10,11 +12,20 @@
 #include "noctua/slam/local_mapping.h"
 #include "noctua/slam/map.h"
 #include "noctua/slam/matcher.h"
+#include "noctua/slam/optimizer.h"
 #include "noctua/slam/slam_options.h"
 
 namespace noctua::slam {
 
-enum class TrackingState { kNotInitialised, kOk, kLost };
+enum class TrackingState {
+  kNotInitialised,
+  kOk,
+  // Not tracked, but given the pose the motion model predicts (for at most
+  // SlamOptions::max_coasting_frames in a row), with a confidence that says how little it is
+  // worth; relocalisation is tried on every such frame.
+  kCoasting,
+  kLost,
+};
 
 // How one frame went.
 struct TrackResult {
@@ -23,6 +34,10 @@ struct TrackResult {
   int keypoints = 0;
   int inliers = 0;
   bool new_keyframe = false;
+  // The pose's confidence (EstimatePoseUncertainty): 1-sigma position and rotation; infinite
+  // when the frame has no pose.
+  double position_sigma_m = std::numeric_limits<double>::infinity();
+  double rotation_sigma_deg = std::numeric_limits<double>::infinity();
   std::map<std::string, double> stage_ms;  // "track", "local_map", "mapping"
 };
 
@@ -59,6 +74,8 @@ class Tracker {
   void SearchLocalPoints();
   bool InFrustum(MapPoint* point, double min_view_cos) const;
   bool NeedNewKeyFrame() const;
+  bool AsCertainAsRecentFrames() const;
+  bool Coast(TrackResult& result);
   void CreateNewKeyFrame();
   int DiscardOutliers();
   void ClearTemporaryPoints();
@@ -75,11 +92,15 @@ class Tracker {
   std::unique_ptr<Frame> current_;
   std::unique_ptr<Frame> last_;
   std::optional<geometry::Pose> velocity_;
+  // The velocity of the last tracked frame, kept through coasted frames (velocity_ is not).
+  std::optional<geometry::Pose> coasting_velocity_;
   KeyFrame* reference_ = nullptr;
   KeyFrame* last_keyframe_ = nullptr;
   long last_keyframe_frame_id_ = 0;
   long last_relocalisation_frame_id_ = -1000;
   int inliers_ = 0;
+  PoseUncertainty uncertainty_;  // of the current frame's pose after local-map tracking
+  std::deque<PoseUncertainty> recent_uncertainty_;  // of the last tracked frames, oldest first
   std::vector<KeyFrame*> local_keyframes_;
   std::vector<MapPoint*> local_points_;
   std::vector<std::unique_ptr<MapPoint>> temporary_points_;  // visual odometry of the last frame

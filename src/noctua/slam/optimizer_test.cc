@@ -1,0 +1,92 @@
+#include "noctua/slam/optimizer.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <memory>
+#include <vector>
+
+namespace noctua::slam {
+namespace {
+
+// A frame at the world origin seeing `positions` (camera = world frame) at their exact
+// projections, each with its depth, every point matched to a map point.
+class UncertaintyTest : public ::testing::Test {
+ protected:
+  double PositionSigma(const std::vector<Eigen::Vector3d>& positions, bool with_depth = true) {
+    geometry::Intrinsics intrinsics;
+    intrinsics.fx = intrinsics.fy = 500.0;
+    intrinsics.cx = 320.0;
+    intrinsics.cy = 240.0;
+    intrinsics.width = 640;
+    intrinsics.height = 480;
+    const geometry::PinholeCamera camera(intrinsics, geometry::Distortion{});
+    std::vector<cv::KeyPoint> keypoints;
+    cv::Mat depth(480, 640, CV_32F, cv::Scalar(0.0f));
+    for (const Eigen::Vector3d& p : positions) {
+      const float u = static_cast<float>(500.0 * p.x() / p.z() + 320.0);
+      const float v = static_cast<float>(500.0 * p.y() / p.z() + 240.0);
+      keypoints.emplace_back(u, v, 31.0f);
+      if (with_depth) depth.at<float>(cvRound(v), cvRound(u)) = static_cast<float>(p.z());
+    }
+    const cv::Mat descriptors(static_cast<int>(positions.size()), 32, CV_8U, cv::Scalar(0));
+    auto features =
+        std::make_shared<const FrameFeatures>(keypoints, descriptors, depth, camera, 40.0, 0.1);
+    Frame frame(0, 0.0, features);
+    KeyFrame* keyframe = map_.AddKeyFrame(frame);
+    for (std::size_t i = 0; i < positions.size(); ++i) {
+      frame.map_points[i] = map_.AddMapPoint(positions[i], keyframe);
+    }
+    const ScalePyramid pyramid(1.2, 8);
+    const PoseUncertainty uncertainty = EstimatePoseUncertainty(frame, pyramid, 40.0);
+    rotation_sigma_deg_ = uncertainty.rotation_sigma_deg;
+    return uncertainty.position_sigma_m;
+  }
+
+  // n x n points at depths z, z + relief and z + 2 relief, spanning `half_width` either side of
+  // the optical axis.
+  static std::vector<Eigen::Vector3d> Grid(int n, double z, double half_width,
+                                           double relief = 0.3) {
+    std::vector<Eigen::Vector3d> positions;
+    for (int i = 0; i < n; ++i) {
+      for (int j = 0; j < n; ++j) {
+        positions.emplace_back(half_width * (2.0 * i / (n - 1) - 1.0),
+                               half_width * (2.0 * j / (n - 1) - 1.0), z + relief * ((i + j) % 3));
+      }
+    }
+    return positions;
+  }
+
+  Map map_;
+  double rotation_sigma_deg_ = 0.0;
+};
+
+TEST_F(UncertaintyTest, ShrinksAsTheSquareRootOfThePointCount) {
+  // The same spread with 4 times the points: half the sigma (information adds up).
+  const double few = PositionSigma(Grid(5, 2.0, 0.8));
+  const double many = PositionSigma(Grid(10, 2.0, 0.8));
+  EXPECT_TRUE(std::isfinite(few));
+  EXPECT_GT(few, 0.0);
+  EXPECT_NEAR(many / few, std::sqrt(25.0 / 100.0), 0.1);
+  EXPECT_GT(rotation_sigma_deg_, 0.0);
+}
+
+// Sideways translation and a turn move the points of a wall facing the camera alike; points at
+// different depths tell them apart (parallax).
+TEST_F(UncertaintyTest, AFlatWallFixesThePositionWorseThanASceneWithDepth) {
+  const double relief = PositionSigma(Grid(6, 2.0, 0.8, 0.3));
+  const double flat = PositionSigma(Grid(6, 2.0, 0.8, 0.0));
+
+  EXPECT_GT(flat, relief);
+  // Farther points fix the position worse (their depth is coarser).
+  EXPECT_GT(PositionSigma(Grid(6, 4.0, 1.6)), relief);
+}
+
+TEST_F(UncertaintyTest, TooFewPointsLeaveThePoseUndetermined) {
+  EXPECT_TRUE(std::isinf(PositionSigma({{0.0, 0.0, 2.0}})));
+  // Two points without depth cannot fix six degrees of freedom.
+  EXPECT_TRUE(std::isinf(PositionSigma({{0.0, 0.0, 2.0}, {0.5, 0.0, 2.0}}, false)));
+}
+
+}  // namespace
+}  // namespace noctua::slam
