@@ -5,9 +5,13 @@
 #include <iostream>
 
 #include "commands.h"
+#include "noctua/util/allocator.h"
 #include "noctua/util/error.h"
 
 int main(int argc, char** argv) {
+  // Frame buffers stay in the process: without it every large image of every frame is faulted in
+  // anew, and a stage's speed depended on which models happened to be loaded.
+  noctua::util::KeepFrameBuffersInProcess();
   CLI::App app{"noctua: feature points for visual SLAM that survive low light and moving people"};
   app.require_subcommand(1);
   bool verbose = false;
