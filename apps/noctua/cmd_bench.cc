@@ -22,8 +22,8 @@
 #include "noctua/pipeline/method.h"
 #include "noctua/slam/rgbd_slam.h"
 #include "noctua/slam/slam_options.h"
-#include "noctua/testing/shared_data.h"
 #include "noctua/util/error.h"
+#include "noctua/util/shared_dir.h"
 #include "noctua/util/timer.h"
 #include "output_dir.h"
 
@@ -178,10 +178,11 @@ void RunBench(const BenchArguments& args) {
   CheckOption(args.frames >= 2, "--frames must be at least 2 (matching needs consecutive frames)");
   CheckOption(args.repeat >= 1, "--repeat must be at least 1");
   CheckOption(args.threads >= 1, "--threads must be at least 1");
-  const std::string dataset =
-      args.dataset.empty()
-          ? std::filesystem::weakly_canonical(testing::DataDir() / "tum_fr1_rpy_200").string()
-          : args.dataset;
+  std::string dataset = args.dataset;
+  if (dataset.empty()) {
+    const auto fr1 = FindSharedDir(NOCTUA_SHARED_DIR) / "data" / "tum_fr1_rpy_200";
+    dataset = std::filesystem::weakly_canonical(fr1).string();
+  }
   const slam::SlamSetup setup = slam::LoadSlamSetup(args.config);
   MethodFlags flags;
   flags.config = args.config;

@@ -1,21 +1,14 @@
 #include "noctua/testing/shared_data.h"
 
 #include <algorithm>
-#include <cstdlib>
 #include <opencv2/imgcodecs.hpp>
 
 #include "noctua/util/error.h"
+#include "noctua/util/shared_dir.h"
 
 namespace noctua::testing {
 
-std::filesystem::path SharedDir() {
-  const char* from_environment = std::getenv("NOCTUA_SHARED_DIR");
-  const std::filesystem::path dir = from_environment ? from_environment : NOCTUA_SHARED_DIR;
-  if (!std::filesystem::is_directory(dir / "data")) {
-    ThrowFileError(dir, "the shared data folder is missing (set NOCTUA_SHARED_DIR)");
-  }
-  return dir;
-}
+std::filesystem::path SharedDir() { return FindSharedDir(NOCTUA_SHARED_DIR); }
 
 std::filesystem::path DataDir() { return SharedDir() / "data"; }
 
