@@ -7,6 +7,7 @@
 #include "commands.h"
 #include "noctua/util/allocator.h"
 #include "noctua/util/error.h"
+#include "noctua/util/version.h"
 
 int main(int argc, char** argv) {
   // Frame buffers stay in the process: without it every large image of every frame is faulted in
@@ -14,6 +15,7 @@ int main(int argc, char** argv) {
   noctua::util::KeepFrameBuffersInProcess();
   CLI::App app{"noctua: feature points for visual SLAM that survive low light and moving people"};
   app.require_subcommand(1);
+  app.set_version_flag("--version", noctua::Version());
   bool verbose = false;
   app.add_flag("-v,--verbose", verbose, "Log debugging detail");
   app.parse_complete_callback(
