@@ -16,6 +16,7 @@
 
 #include "cli_runner.h"
 #include "noctua/testing/shared_data.h"
+#include "noctua/util/version.h"
 
 namespace {
 
@@ -31,6 +32,12 @@ class CliTest : public ::testing::Test {
   std::filesystem::path dir_ =
       std::filesystem::temp_directory_path() / ("noctua_cli_test_" + std::to_string(::getpid()));
 };
+
+TEST_F(CliTest, VersionPrintsTheProjectVersion) {
+  const CommandResult result = RunNoctua("--version");
+  EXPECT_EQ(result.exit_code, 0);
+  EXPECT_EQ(result.output, std::string(NOCTUA_VERSION_STRING) + "\n");
+}
 
 TEST_F(CliTest, DemoWritesOverlaysAndASummaryAndCanBeRunAgain) {
   const auto out = dir_ / "demo";
