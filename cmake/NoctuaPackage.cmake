@@ -1,0 +1,49 @@
+# Installation of the libraries as a CMake package (find_package(noctua CONFIG)) and a
+# pkg-config file. Included after every module has added its library.
+include(CMakePackageConfigHelpers)
+
+set(noctua_summary
+    "Feature points for visual SLAM in low light and dynamic scenes, with an RGB-D SLAM")
+
+get_property(noctua_modules GLOBAL PROPERTY NOCTUA_INSTALLED_MODULES)
+
+# noctua::noctua: every installed module at once.
+add_library(noctua_all INTERFACE)
+add_library(noctua::noctua ALIAS noctua_all)
+set_target_properties(noctua_all PROPERTIES EXPORT_NAME noctua)
+foreach(module IN LISTS noctua_modules)
+  target_link_libraries(noctua_all INTERFACE noctua::${module})
+endforeach()
+install(TARGETS noctua_all EXPORT noctuaTargets)
+
+set(noctua_cmake_dir ${CMAKE_INSTALL_LIBDIR}/cmake/noctua)
+install(EXPORT noctuaTargets NAMESPACE noctua:: DESTINATION ${noctua_cmake_dir})
+configure_package_config_file(cmake/noctuaConfig.cmake.in
+                              ${PROJECT_BINARY_DIR}/package/noctuaConfig.cmake
+                              INSTALL_DESTINATION ${noctua_cmake_dir})
+# 0.x: a new minor version may change the interface.
+write_basic_package_version_file(${PROJECT_BINARY_DIR}/package/noctuaConfigVersion.cmake
+                                 COMPATIBILITY SameMinorVersion)
+install(FILES ${PROJECT_BINARY_DIR}/package/noctuaConfig.cmake
+              ${PROJECT_BINARY_DIR}/package/noctuaConfigVersion.cmake
+        DESTINATION ${noctua_cmake_dir})
+
+# pkg-config: the libraries are static, so a module must come before the modules it uses. The
+# modules are added in that order (src/noctua/CMakeLists.txt), so the reverse of it is one.
+set(noctua_pc_libs "")
+foreach(module IN LISTS noctua_modules)
+  set(noctua_pc_libs "-lnoctua_${module} ${noctua_pc_libs}")
+endforeach()
+string(STRIP "${noctua_pc_libs}" noctua_pc_libs)
+# The prefix is found from the .pc file's own place, so that an install moved elsewhere (or made
+# with cmake --install --prefix) still points at itself.
+file(RELATIVE_PATH noctua_pc_to_prefix /prefix/${CMAKE_INSTALL_LIBDIR}/pkgconfig /prefix)
+string(REGEX REPLACE "/$" "" noctua_pc_to_prefix "${noctua_pc_to_prefix}")
+configure_file(cmake/noctua.pc.in ${PROJECT_BINARY_DIR}/package/noctua.pc @ONLY)
+install(FILES ${PROJECT_BINARY_DIR}/package/noctua.pc
+        DESTINATION ${CMAKE_INSTALL_LIBDIR}/pkgconfig)
+
+# The camera presets, for the examples and for running the installed command on TUM/OpenLORIS.
+install(DIRECTORY config/ DESTINATION ${CMAKE_INSTALL_DATADIR}/noctua/config
+        FILES_MATCHING PATTERN "*.yaml")
+install(FILES LICENSE README.md DESTINATION ${CMAKE_INSTALL_DOCDIR})
