@@ -1,5 +1,5 @@
-# Installation of the libraries as a CMake package (find_package(noctua CONFIG)) and a
-# pkg-config file. Included after every module has added its library.
+# Installation of the libraries as a CMake package (find_package(noctua CONFIG)), a pkg-config
+# file and a Debian package (cpack -G DEB). Included after every module has added its library.
 include(CMakePackageConfigHelpers)
 
 set(noctua_summary
@@ -47,3 +47,20 @@ install(FILES ${PROJECT_BINARY_DIR}/package/noctua.pc
 install(DIRECTORY config/ DESTINATION ${CMAKE_INSTALL_DATADIR}/noctua/config
         FILES_MATCHING PATTERN "*.yaml")
 install(FILES LICENSE README.md DESTINATION ${CMAKE_INSTALL_DOCDIR})
+
+set(CPACK_PACKAGE_NAME noctua)
+set(CPACK_PACKAGE_VENDOR noctua)
+set(CPACK_PACKAGE_CONTACT "noctua maintainers <noctua@localhost>")
+set(CPACK_PACKAGE_DESCRIPTION_SUMMARY ${noctua_summary})
+set(CPACK_RESOURCE_FILE_LICENSE ${PROJECT_SOURCE_DIR}/LICENSE)
+set(CPACK_PACKAGING_INSTALL_PREFIX /usr)
+set(CPACK_DEBIAN_FILE_NAME DEB-DEFAULT)
+set(CPACK_DEBIAN_PACKAGE_SECTION libdevel)
+# The command's shared libraries come from dpkg-shlibdeps; the static libraries and headers need
+# the development packages of what they use, which no tool can find.
+set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
+set(CPACK_DEBIAN_PACKAGE_DEPENDS
+    "libopencv-dev (>= 4.6), libeigen3-dev (>= 3.4), libceres-dev (>= 2.1), libyaml-cpp-dev, \
+nlohmann-json3-dev (>= 3.10), libspdlog-dev, libfftw3-dev")
+set(CPACK_DEBIAN_PACKAGE_RECOMMENDS "cmake, pkg-config")
+include(CPack)
