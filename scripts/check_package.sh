@@ -1,0 +1,68 @@
+#!/usr/bin/env bash
+# Checks noctua as another project sees it: installs an existing build (default build/, made by
+# scripts/setup.sh) into a fresh prefix, builds examples/ against it through
+# find_package(noctua), runs them on real frames from ../shared/data, and checks the pkg-config
+# file, including a program built from its flags alone. Exits non-zero on any failure.
+# Usage: scripts/check_package.sh    (NOCTUA_BUILD_DIR selects another build)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+build_dir=${NOCTUA_BUILD_DIR:-build}
+shared=${NOCTUA_SHARED_DIR:-../shared}
+sequence=$shared/data/tum_fr1_rpy_200
+
+fail() {
+  echo "check_package: FAILED: $*" >&2
+  exit 1
+}
+[ -f "$build_dir/CMakeCache.txt" ] || fail "$build_dir is not a build (run scripts/setup.sh)"
+[ -d "$sequence/rgb" ] || fail "$sequence/rgb is missing"
+expected=$(sed -n 's/^CMAKE_PROJECT_VERSION:STATIC=//p' "$build_dir/CMakeCache.txt")
+[ -n "$expected" ] || fail "no project version in $build_dir/CMakeCache.txt"
+
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+prefix=$work/prefix
+
+echo "check_package: installing $build_dir into an empty prefix"
+cmake --install "$build_dir" --prefix "$prefix" >"$work/install.log" ||
+  { cat "$work/install.log"; fail "cmake --install"; }
+version=$("$prefix/bin/noctua" --version) || fail "noctua --version"
+[ "$version" = "$expected" ] || fail "noctua --version says '$version', expected '$expected'"
+for unwanted in include/noctua/testing include/noctua/fuzz include/noctua/slam/reprojection_cost.h; do
+  [ ! -e "$prefix/$unwanted" ] || fail "$unwanted is installed"
+done
+if find "$prefix" -name '*_test*' | grep -q .; then fail "test files are installed"; fi
+
+echo "check_package: building examples/ against the installed package"
+cmake -S examples -B "$work/examples" -DCMAKE_PREFIX_PATH="$prefix" >"$work/examples.log" 2>&1 ||
+  { cat "$work/examples.log"; fail "configuring examples/"; }
+cmake --build "$work/examples" --parallel "$(nproc)" >>"$work/examples.log" 2>&1 ||
+  { cat "$work/examples.log"; fail "building examples/"; }
+
+frame=$(find "$sequence/rgb" -name '*.png' | sort | head -n 1)
+output=$("$work/examples/extract_keypoints" "$frame") || fail "extract_keypoints $frame"
+echo "  extract_keypoints: $output"
+keypoints=$(sed -n 's/.*: \([0-9]*\) keypoints.*/\1/p' <<<"$output")
+[ "${keypoints:-0}" -ge 500 ] || fail "extract_keypoints found ${keypoints:-no} keypoints (< 500)"
+
+output=$("$work/examples/slam_sequence" "$sequence" "$prefix/share/noctua/config/tum_fr1.yaml" \
+  100) || fail "slam_sequence"
+echo "  slam_sequence: ${output//$'\n'/; }"
+tracked=$(sed -n 's/.*tracked \([0-9]*\),.*/\1/p' <<<"$output")
+[ "${tracked:-0}" -ge 50 ] || fail "slam_sequence tracked ${tracked:-no} of 100 frames"
+grep -q '^ATE RMSE' <<<"$output" || fail "slam_sequence gave no ATE"
+
+echo "check_package: pkg-config"
+pc=$(find "$prefix" -name noctua.pc)
+[ -n "$pc" ] || fail "noctua.pc is not installed"
+PKG_CONFIG_PATH=$(dirname "$pc")
+export PKG_CONFIG_PATH
+pc_version=$(pkg-config --modversion noctua) || fail "pkg-config --modversion noctua"
+[ "$pc_version" = "$expected" ] || fail "pkg-config says '$pc_version', expected '$expected'"
+# shellcheck disable=SC2046  # the flags are meant to split into words
+c++ -std=c++20 -O1 examples/extract_keypoints.cc -o "$work/extract_keypoints_pc" \
+  $(pkg-config --cflags --libs noctua) >"$work/pc.log" 2>&1 ||
+  { cat "$work/pc.log"; fail "building from pkg-config's flags"; }
+"$work/extract_keypoints_pc" "$frame" >/dev/null || fail "the pkg-config build does not run"
+
+echo "check_package: OK (noctua $expected)"
