@@ -82,7 +82,11 @@ TrackResult Tracker::Track(Frame frame) {
           current_->outlier[i] = false;
         }
       }
-      if (NeedNewKeyFrame()) {
+      // A keyframe anchors the points made from it: one made from a pose less certain than
+      // the frames before it (a fast turn) places them with that pose's error, and every run
+      // that made it there parted from the others (docs/slam.md, "Where runs part"). It waits
+      // for a surer frame.
+      if (NeedNewKeyFrame() && AsCertainAsRecentFrames()) {
         CreateNewKeyFrame();
         result.new_keyframe = true;
       }
