@@ -271,7 +271,9 @@ TEST_F(RgbdSlamTest, KeyFramesResumeRightAfterARelocalisationUnlessPaused) {
       lost_after += run.frames[static_cast<std::size_t>(i)].state != TrackingState::kOk ? 1 : 0;
     }
     if (pause == 0) {
-      EXPECT_GE(keyframes_after, 2);
+      // At least one: a keyframe also waits for a pose as certain as the recent frames' (the
+      // frames right after a relocalisation are less so); with the pause, none.
+      EXPECT_GE(keyframes_after, 1);
       EXPECT_EQ(lost_after, 0);
     } else {
       // (The starved map loses frames 53 and 54 here: why the default is 0.)
