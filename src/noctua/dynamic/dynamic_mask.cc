@@ -19,14 +19,15 @@ double DepthNoiseSigma(double z_m) { return 0.0012 + 0.0019 * (z_m - 0.4) * (z_m
 
 namespace {
 
-// The q-quantile of the valid (positive) depths of `depth_m` under `where` (CV_8U); 0 when none.
+// The q-quantile of the valid (positive) depths of `depth_m` where `where` (CV_8U, same size) is
+// set, or everywhere when `where` is empty; 0 when there are none.
 double DepthQuantile(const cv::Mat& depth_m, const cv::Mat& where, double q) {
   std::vector<float> values;
   for (int y = 0; y < depth_m.rows; ++y) {
     const float* d = depth_m.ptr<float>(y);
-    const uchar* w = where.ptr<uchar>(y);
+    const uchar* w = where.empty() ? nullptr : where.ptr<uchar>(y);
     for (int x = 0; x < depth_m.cols; ++x) {
-      if (w[x] != 0 && d[x] > 0.0f) values.push_back(d[x]);
+      if ((w == nullptr || w[x] != 0) && d[x] > 0.0f) values.push_back(d[x]);
     }
   }
   if (values.empty()) return 0.0;
@@ -48,26 +49,22 @@ double ObjectDepth(const Detection& detection, const cv::Mat& depth_m) {
   if (depth_m.type() != CV_32FC1) {
     throw Error("dynamic mask: the depth image must be CV_32F metres");
   }
-  if (!detection.mask.empty()) return DepthQuantile(depth_m, detection.mask, 0.5);
   const cv::Rect box = BoxPixels(detection, depth_m.size());
+  if (!detection.mask.empty()) return DepthQuantile(depth_m(box), detection.mask(box), 0.5);
   const cv::Rect middle(box.x + box.width / 3, box.y + box.height / 5, std::max(1, box.width / 3),
                         std::max(1, box.height * 3 / 5));
-  cv::Mat where = cv::Mat::zeros(depth_m.size(), CV_8U);
-  where(middle & box).setTo(255);
-  return DepthQuantile(depth_m, where, 0.25);
+  return DepthQuantile(depth_m(middle & box), cv::Mat(), 0.25);
 }
 
-cv::Mat DepthSegment(const cv::Mat& region, double object_depth_m, const cv::Mat& depth_m,
-                     double object_half_depth_m) {
-  if (depth_m.type() != CV_32FC1 || depth_m.size() != region.size()) {
-    throw Error("dynamic mask: the depth image must be CV_32F metres of the frame's size");
-  }
-  if (object_depth_m <= 0.0) return region.clone();
+cv::Mat DepthSegment(const cv::Mat& depth_m, double object_depth_m, double object_half_depth_m) {
+  if (depth_m.type() != CV_32FC1)
+    throw Error("dynamic mask: the depth image must be CV_32F metres");
+  if (object_depth_m <= 0.0) return cv::Mat(depth_m.size(), CV_8U, cv::Scalar(255));
   const double tolerance = object_half_depth_m + 3.0 * DepthNoiseSigma(object_depth_m);
   cv::Mat near_object, no_depth;
   cv::inRange(depth_m, object_depth_m - tolerance, object_depth_m + tolerance, near_object);
   cv::compare(depth_m, 0.0, no_depth, cv::CMP_LE);
-  return region & (near_object | no_depth);
+  return near_object | no_depth;
 }
 
 std::vector<DynamicObject> FindDynamicObjects(const std::vector<Detection>& detections,
@@ -125,9 +122,8 @@ cv::Mat DynamicObjectsMask(const std::vector<DynamicObject>& objects,
     // The box cut to the object's depth segment. An instance mask misses the object's fringe (it
     // comes from a coarse prototype grid), so the segment extends it; once the object has moved
     // on (grow_px > 0), the old instance mask says no more than the segment.
-    cv::Mat region = cv::Mat::zeros(size, CV_8U);
-    region(box).setTo(255);
-    mask |= DepthSegment(region, object.depth_m, depth_m, options.object_half_depth_m);
+    cv::Mat in_box = mask(box);
+    in_box |= DepthSegment(depth_m(box), object.depth_m, options.object_half_depth_m);
     if (!instance.empty() && grow_px == 0) mask |= instance;
   }
   if (options.dilation_px > 0) {

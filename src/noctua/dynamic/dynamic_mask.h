@@ -69,13 +69,13 @@ cv::Mat DynamicObjectsMask(const std::vector<DynamicObject>& objects,
 // shows, so its depth is the near side of the box's). 0 when no pixel there has depth.
 double ObjectDepth(const Detection& detection, const cv::Mat& depth_m);
 
-// The pixels of `region` (CV_8U) that belong to an object at `object_depth_m`: those whose depth
-// lies within object_depth_m ± (object_half_depth_m + 3 sigma of the sensor's depth noise there),
-// and those without depth (unknown, so not trusted as static). The background far behind the
-// object and a static occluder well in front of it are left out. With no object depth (0) the
-// region is kept whole.
-cv::Mat DepthSegment(const cv::Mat& region, double object_depth_m, const cv::Mat& depth_m,
-                     double object_half_depth_m);
+// Which pixels of `depth_m` (CV_32F metres; callers pass the object's box) belong to an object at
+// `object_depth_m` (CV_8U, 255 = object): those whose depth lies within object_depth_m ±
+// (object_half_depth_m + 3 sigma of the sensor's depth noise there), and those without depth
+// (unknown, so not trusted as static). The background far behind the object and a static
+// occluder well in front of it are left out. With no object depth (0) every pixel is the
+// object's.
+cv::Mat DepthSegment(const cv::Mat& depth_m, double object_depth_m, double object_half_depth_m);
 
 // Axial noise (1 sigma, metres) of a structured-light RGB-D camera (Kinect / Xtion class) at depth
 // `z_m`: 0.0012 + 0.0019 (z - 0.4)^2 (Nguyen, Izadi, Lovell, 3DIMPVT 2012).

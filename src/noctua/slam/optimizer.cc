@@ -92,9 +92,13 @@ PoseUncertainty EstimatePoseUncertainty(const Frame& frame, const ScalePyramid& 
         -p.z(), 0.0, p.x(),                           //
         p.y(), -p.x(), 0.0;
     d_p_d_twist.rightCols<3>().setIdentity();
-    const int rows = o.stereo ? 3 : 2;
-    const Eigen::MatrixXd jacobian = o.inverse_sigma * d_residual_d_p.topRows(rows) * d_p_d_twist;
-    information += jacobian.transpose() * jacobian;
+    const Eigen::Matrix<double, 3, 6> jacobian = o.inverse_sigma * d_residual_d_p * d_p_d_twist;
+    // A keypoint without depth has no third (disparity) residual.
+    if (o.stereo) {
+      information += jacobian.transpose() * jacobian;
+    } else {
+      information += jacobian.topRows<2>().transpose() * jacobian.topRows<2>();
+    }
   }
   PoseUncertainty uncertainty;
   const Eigen::FullPivLU<Eigen::Matrix<double, 6, 6>> lu(information);
