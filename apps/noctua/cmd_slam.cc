@@ -57,6 +57,7 @@ struct SlamArguments {
   // ahead of their extraction; --detect-inline runs it in the extraction on every frame.
   int detect_every = dynamic::AsyncMaskOptions().every_n;
   bool detect_inline = false;
+  bool reject_moving_points = false;
   MethodFlags method;
 };
 
@@ -79,7 +80,8 @@ const char* StateName(slam::TrackingState state) {
 std::string FramesCsv(const slam::SequenceRun& run, const std::vector<std::string>& stages,
                       const std::vector<double>& rss_mb) {
   std::string csv =
-      "frame,timestamp,state,method,keypoints,inliers,position_sigma_mm,rotation_sigma_deg,"
+      "frame,timestamp,state,method,keypoints,inliers,moving_keypoints,position_sigma_mm,rotation_"
+      "sigma_deg,"
       "keyframe,keyframes,map_points,rss_mb";
   for (const auto& stage : stages) csv += "," + stage + "_ms";
   csv += "\n";
@@ -93,9 +95,9 @@ std::string FramesCsv(const slam::SequenceRun& run, const std::vector<std::strin
       std::snprintf(sigma, sizeof(sigma), "%.2f,%.3f", 1000.0 * f.position_sigma_m,
                     f.rotation_sigma_deg);
     }
-    std::snprintf(buffer, sizeof(buffer), "%zu,%.6f,%s,%s,%d,%d,%s,%d,%d,%d,%.1f", i, f.timestamp,
-                  StateName(f.state), f.method.c_str(), f.keypoints, f.inliers, sigma,
-                  f.new_keyframe ? 1 : 0, f.keyframes, f.map_points,
+    std::snprintf(buffer, sizeof(buffer), "%zu,%.6f,%s,%s,%d,%d,%d,%s,%d,%d,%d,%.1f", i,
+                  f.timestamp, StateName(f.state), f.method.c_str(), f.keypoints, f.inliers,
+                  f.moving_keypoints, sigma, f.new_keyframe ? 1 : 0, f.keyframes, f.map_points,
                   i < rss_mb.size() ? rss_mb[i] : 0.0);
     csv += buffer;
     for (const auto& stage : stages) {
@@ -114,7 +116,8 @@ void RunSlam(const SlamArguments& args) {
   CheckOption(args.max_frames >= 0, "--max-frames must not be negative");
   CheckOption(args.detect_every >= 1, "--detect-every must be at least 1");
   if (args.method.config.empty()) throw Error("slam needs --config (a camera preset, see config/)");
-  const slam::SlamSetup setup = slam::LoadSlamSetup(args.method.config);
+  slam::SlamSetup setup = slam::LoadSlamSetup(args.method.config);
+  setup.options.reject_moving_points = args.reject_moving_points;
   pipeline::MethodConfig method_config = MethodConfigFromFlags(args.method);
   method_config.detect_ahead = !args.detect_inline;
   method_config.detect_ahead_options.every_n = args.detect_every;
@@ -170,6 +173,7 @@ void RunSlam(const SlamArguments& args) {
   report["config"] = args.method.config;
   report["method"] = args.method.method;
   report["brightness"] = args.brightness;
+  report["reject_moving_points"] = args.reject_moving_points;
   report["frames"] = run.frames.size();
   report["tracked_frames"] = run.trajectory.size();
   report["lost_frames"] = run.lost_frames.size();
@@ -285,6 +289,9 @@ void AddSlamCommand(CLI::App& app) {
       ->add_flag("--detect-inline", args->detect_inline,
                  "With --detector: detect every frame inside the extraction (slower, exact masks)")
       ->excludes(detect_every);
+  command->add_flag("--reject-moving-points", args->reject_moving_points,
+                    "Keep points that move against the static world out of tracking and mapping, "
+                    "found from geometry alone (no detector needed; docs/slam.md, Moving points)");
   command->callback([args] { RunSlam(*args); });
 }
 

@@ -4,6 +4,7 @@
 #include <opencv2/imgproc.hpp>
 #include <vector>
 
+#include "noctua/geometry/camera.h"
 #include "noctua/util/error.h"
 
 namespace noctua::dynamic {
@@ -14,8 +15,6 @@ void DynamicMaskOptions::Check() const {
   CheckOption(object_half_depth_m > 0.0 && object_half_depth_m <= 5.0,
               "dynamic mask object_half_depth_m must be in (0, 5]");
 }
-
-double DepthNoiseSigma(double z_m) { return 0.0012 + 0.0019 * (z_m - 0.4) * (z_m - 0.4); }
 
 namespace {
 
@@ -60,7 +59,7 @@ cv::Mat DepthSegment(const cv::Mat& depth_m, double object_depth_m, double objec
   if (depth_m.type() != CV_32FC1)
     throw Error("dynamic mask: the depth image must be CV_32F metres");
   if (object_depth_m <= 0.0) return cv::Mat(depth_m.size(), CV_8U, cv::Scalar(255));
-  const double tolerance = object_half_depth_m + 3.0 * DepthNoiseSigma(object_depth_m);
+  const double tolerance = object_half_depth_m + 3.0 * geometry::DepthNoiseSigma(object_depth_m);
   cv::Mat near_object, no_depth;
   cv::inRange(depth_m, object_depth_m - tolerance, object_depth_m + tolerance, near_object);
   cv::compare(depth_m, 0.0, no_depth, cv::CMP_LE);

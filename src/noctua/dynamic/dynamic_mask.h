@@ -77,10 +77,6 @@ double ObjectDepth(const Detection& detection, const cv::Mat& depth_m);
 // object's.
 cv::Mat DepthSegment(const cv::Mat& depth_m, double object_depth_m, double object_half_depth_m);
 
-// Axial noise (1 sigma, metres) of a structured-light RGB-D camera (Kinect / Xtion class) at depth
-// `z_m`: 0.0012 + 0.0019 (z - 0.4)^2 (Nguyen, Izadi, Lovell, 3DIMPVT 2012).
-double DepthNoiseSigma(double z_m);
-
 // The instance mask of the largest object (by mask area) of `class_id`, e.g. a person to cut out of
 // a frame; empty when there is none or the detections carry no masks (box-only models).
 cv::Mat LargestInstanceMask(const std::vector<Detection>& detections, int class_id);

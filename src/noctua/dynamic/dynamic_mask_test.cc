@@ -8,6 +8,7 @@
 
 #include "noctua/dynamic/async_masks.h"
 #include "noctua/dynamic/coco.h"
+#include "noctua/geometry/camera.h"
 #include "noctua/testing/shared_data.h"
 #include "noctua/util/error.h"
 
@@ -79,7 +80,7 @@ TEST(DepthSegment, CutsABoxToThePersonsDepthAndFollowsACarriedPerson) {
   options.depth_segment = false;
   EXPECT_EQ(cv::countNonZero(BuildDynamicMask(detections, table, options, size, depth)), 200 * 420);
   // The tolerance follows the sensor's noise: wider far away.
-  EXPECT_GT(DepthNoiseSigma(4.0), 5 * DepthNoiseSigma(1.0));
+  EXPECT_GT(geometry::DepthNoiseSigma(4.0), 5 * geometry::DepthNoiseSigma(1.0));
 }
 
 TEST(LargestInstanceMask, PicksTheLargestMaskOfTheClassOnly) {

@@ -6,6 +6,8 @@
 
 namespace noctua::geometry {
 
+double DepthNoiseSigma(double z_m) { return 0.0012 + 0.0019 * (z_m - 0.4) * (z_m - 0.4); }
+
 cv::Mat Distortion::AsCvMat() const { return (cv::Mat_<double>(1, 5) << k1, k2, p1, p2, k3); }
 
 void Intrinsics::Check() const {

@@ -6,6 +6,10 @@
 
 namespace noctua::geometry {
 
+// Axial noise (1 sigma, metres) of a structured-light RGB-D camera (Kinect / Xtion class) at depth
+// `z_m`: 0.0012 + 0.0019 (z - 0.4)^2 (Nguyen, Izadi, Lovell, 3DIMPVT 2012).
+double DepthNoiseSigma(double z_m);
+
 // Brown-Conrady distortion with OpenCV's (and ORB-SLAM's) coefficient order k1 k2 p1 p2 k3.
 struct Distortion {
   double k1 = 0.0;

@@ -79,7 +79,8 @@ struct Frame {
         timestamp(time),
         features(std::move(frame_features)),
         map_points(static_cast<std::size_t>(features->size()), nullptr),
-        outlier(static_cast<std::size_t>(features->size()), false) {}
+        outlier(static_cast<std::size_t>(features->size()), false),
+        moving(static_cast<std::size_t>(features->size()), false) {}
 
   int size() const { return features->size(); }
   // World position of keypoint i lifted with its depth (requires depth and a pose).
@@ -89,8 +90,11 @@ struct Frame {
   long id = 0;
   double timestamp = 0.0;
   std::shared_ptr<const FrameFeatures> features;
-  std::vector<MapPoint*> map_points;                    // nullptr: no match
-  std::vector<bool> outlier;                            // set by pose optimisation
+  std::vector<MapPoint*> map_points;  // nullptr: no match
+  std::vector<bool> outlier;          // set by pose optimisation
+  // Keypoints on something that moves against the static world (moving_points.h): not matched,
+  // not mapped.
+  std::vector<bool> moving;
   geometry::Pose pose_cw = geometry::Pose::Identity();  // world to camera
 };
 

@@ -76,6 +76,7 @@ class MapPoint {
   double track_x = 0.0, track_y = 0.0, track_right_x = 0.0, track_view_cos = 0.0;
   int track_level = 0;
   long local_ba_keyframe = -1;
+  int moving_frames = 0;  // tracked frames in a row in which the point moved against the world
 
  private:
   long id_;

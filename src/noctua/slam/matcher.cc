@@ -69,6 +69,7 @@ int Matcher::SearchByProjection(Frame& current, const Frame& last, double radius
     int best_distance = 256;
     int best_index = -1;
     for (int candidate : candidates) {
+      if (current.moving[static_cast<std::size_t>(candidate)]) continue;
       MapPoint* existing = current.map_points[static_cast<std::size_t>(candidate)];
       if (existing != nullptr && existing->num_observations() > 0) continue;
       if (features.depth(candidate) > 0.0 &&
@@ -114,6 +115,7 @@ int Matcher::SearchByProjection(Frame& frame, const std::vector<MapPoint*>& poin
     int best_level = -1, second_level = -1;
     int best_index = -1;
     for (int candidate : candidates) {
+      if (frame.moving[static_cast<std::size_t>(candidate)]) continue;
       MapPoint* existing = frame.map_points[static_cast<std::size_t>(candidate)];
       if (existing != nullptr && existing->num_observations() > 0) continue;
       if (features.depth(candidate) > 0.0 &&
@@ -167,7 +169,10 @@ int Matcher::SearchByProjection(Frame& frame, const KeyFrame& keyframe,
     int best_distance = 256;
     int best_index = -1;
     for (int candidate : candidates) {
-      if (frame.map_points[static_cast<std::size_t>(candidate)] != nullptr) continue;
+      if (frame.map_points[static_cast<std::size_t>(candidate)] != nullptr ||
+          frame.moving[static_cast<std::size_t>(candidate)]) {
+        continue;
+      }
       const int distance = DescriptorDistance(point->descriptor(), features.descriptor(candidate));
       if (distance < best_distance) {
         best_distance = distance;
@@ -225,7 +230,7 @@ int Matcher::SearchByDescriptor(const KeyFrame& keyframe, const Frame& frame,
   std::vector<float> angle_changes;
   for (int f = 0; f < frame.size(); ++f) {
     const int q = best_query[static_cast<std::size_t>(f)];
-    if (q < 0) continue;
+    if (q < 0 || frame.moving[static_cast<std::size_t>(f)]) continue;
     matched.push_back(f);
     angle_changes.push_back(
         keyframe.features().keypoint(keyframe_indices[static_cast<std::size_t>(q)]).angle -

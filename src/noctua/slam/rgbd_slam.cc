@@ -218,6 +218,7 @@ SequenceRun RunSequence(const io::Sequence& sequence, double depth_factor,
     outcome.state = result.state;
     outcome.method = result.method;
     outcome.inliers = result.inliers;
+    outcome.moving_keypoints = result.moving_keypoints;
     outcome.position_sigma_m = result.position_sigma_m;
     outcome.rotation_sigma_deg = result.rotation_sigma_deg;
     outcome.new_keyframe = result.new_keyframe;

@@ -58,6 +58,7 @@ struct FrameOutcome {
   std::string method;
   int keypoints = 0;
   int inliers = 0;
+  int moving_keypoints = 0;       // kept out of tracking and mapping as moving
   double position_sigma_m = 0.0;  // the pose's confidence (TrackResult); infinite without pose
   double rotation_sigma_deg = 0.0;
   bool new_keyframe = false;

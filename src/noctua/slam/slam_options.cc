@@ -27,6 +27,8 @@ void SlamOptions::Check() const {
   CheckOption(local_ba_max_covisibles >= 0, "slam: local_ba_max_covisibles must be >= 0");
   CheckOption(keyframe_redundancy > 0.0 && keyframe_redundancy <= 1.0,
               "slam: keyframe_redundancy must be in (0, 1]");
+  moving.Check();
+  CheckOption(moving_frames_to_cull >= 1, "slam: moving_frames_to_cull must be at least 1");
 }
 
 SlamSetup LoadSlamSetup(const std::filesystem::path& path) {

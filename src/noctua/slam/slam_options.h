@@ -3,6 +3,7 @@
 #include <filesystem>
 
 #include "noctua/io/camera_config.h"
+#include "noctua/slam/moving_points.h"
 
 namespace noctua::slam {
 
@@ -58,6 +59,19 @@ struct SlamOptions {
   // ORB-SLAM's weighted observation count, which made it harmful).
   bool fuse_neighbours = true;
   double keyframe_redundancy = 0.9;  // culled when this share of its points is seen thrice
+
+  // Model-free rejection of moving points (moving_points.h, docs/slam.md "Moving points"). Each
+  // frame's keypoints that move against the static world over the segmenter's baseline, and the
+  // regions around them, are neither matched nor mapped; before each pose optimisation, matches
+  // that do not keep their distances to the static world's are dropped. It needs no detector,
+  // and catches what a detector does not know. Off by default: in fast rotation (tum fr1/rpy)
+  // depth that lags the colour image makes static points fail the test too, and frames are lost
+  // (docs/slam.md).
+  bool reject_moving_points = false;
+  MotionSegmenterOptions moving;
+  // A map point that moved in this many tracked frames in a row is culled: once could be a wrong
+  // match; twice in a row is a mover (or a point placed wrongly, which is as useless).
+  int moving_frames_to_cull = 2;
 
   // Throws noctua::Error naming the first invalid field.
   void Check() const;

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/eigen.hpp>
 #include <set>
@@ -16,17 +18,22 @@ Tracker::Tracker(const SlamOptions& options)
       pyramid_(options.scale_factor, options.num_levels),
       mapper_(options_, pyramid_),
       matcher_(0.9, true, pyramid_, options.bf),
-      strict_matcher_(0.7, true, pyramid_, options.bf) {
+      strict_matcher_(0.7, true, pyramid_, options.bf),
+      segmenter_(options.moving, pyramid_) {
   options_.Check();
 }
 
 TrackResult Tracker::Track(Frame frame) {
   TrackResult result;
   current_ = std::make_unique<Frame>(std::move(frame));
+  if (options_.reject_moving_points) {
+    current_->moving = segmenter_.FlagMoving(current_->features, current_->timestamp);
+  }
   Stopwatch watch;
   bool ok = false;
   if (state_ == TrackingState::kNotInitialised) {
-    ok = Initialise(*current_);
+    // With moving points rejected, the map starts once they can be told apart.
+    ok = (!options_.reject_moving_points || segmenter_.had_baseline()) && Initialise(*current_);
     result.state = ok ? TrackingState::kOk : TrackingState::kNotInitialised;
     result.method = ok ? "init" : "";
     result.new_keyframe = ok;
@@ -100,6 +107,8 @@ TrackResult Tracker::Track(Frame frame) {
     ClearTemporaryPoints();
   }
   if (state_ == TrackingState::kNotInitialised && ok) state_ = TrackingState::kOk;
+  result.moving_keypoints =
+      static_cast<int>(std::count(current_->moving.begin(), current_->moving.end(), true));
 
   FrameRecord record;
   record.frame_id = current_->id;
@@ -160,7 +169,7 @@ bool Tracker::Initialise(Frame& frame) {
   frame.pose_cw = geometry::Pose::Identity();
   KeyFrame* keyframe = map_.AddKeyFrame(frame);
   for (int i = 0; i < frame.size(); ++i) {
-    if (frame.features->depth(i) <= 0.0) continue;
+    if (frame.features->depth(i) <= 0.0 || frame.moving[static_cast<std::size_t>(i)]) continue;
     MapPoint* point = map_.AddMapPoint(frame.Unproject(i), keyframe);
     point->AddObservation(keyframe, i);
     keyframe->SetMapPoint(i, point);
@@ -187,7 +196,9 @@ void Tracker::UpdateLastFrame() {
   }
   std::vector<std::pair<double, int>> by_depth;
   for (int i = 0; i < last_->size(); ++i) {
-    if (last_->features->depth(i) > 0.0) by_depth.emplace_back(last_->features->depth(i), i);
+    if (last_->features->depth(i) > 0.0 && !last_->moving[static_cast<std::size_t>(i)]) {
+      by_depth.emplace_back(last_->features->depth(i), i);
+    }
   }
   std::sort(by_depth.begin(), by_depth.end());
   int created = 0;
@@ -217,6 +228,7 @@ bool Tracker::TrackWithMotionModel() {
     matches = matcher_.SearchByProjection(frame, *last_, 30.0);
   }
   if (matches < 20) return false;
+  RejectMovingMatches(false);
   OptimizePose(frame, pyramid_, options_.bf);
   return DiscardOutliers() >= 10;
 }
@@ -244,6 +256,7 @@ bool Tracker::TrackReferenceKeyFrame() {
   std::vector<MapPoint*> matches;
   if (strict_matcher_.SearchByDescriptor(*reference_, frame, matches) < 15) return false;
   frame.map_points = matches;
+  RejectMovingMatches(false);
   frame.pose_cw = last_->pose_cw;
   OptimizePose(frame, pyramid_, options_.bf);
   return DiscardOutliers() >= 10;
@@ -428,6 +441,7 @@ bool Tracker::TrackLocalMap() {
   UpdateLocalMap();
   SearchLocalPoints();
   Frame& frame = *current_;
+  RejectMovingMatches(true);
   OptimizePose(frame, pyramid_, options_.bf);
   inliers_ = 0;
   for (std::size_t i = 0; i < frame.map_points.size(); ++i) {
@@ -450,6 +464,42 @@ bool Tracker::TrackLocalMap() {
   // Fewer inliers than usual, as where people cover most of the view: the pose stands when the
   // few static points that remain still fix it as well as a normal frame's do.
   return inliers_ >= options_.min_certain_inliers && AsCertainAsRecentFrames();
+}
+
+int Tracker::RejectMovingMatches(bool vote) {
+  if (!options_.reject_moving_points) return 0;
+  Frame& frame = *current_;
+  const FrameFeatures& features = *frame.features;
+  std::vector<PointPair> pairs;
+  std::vector<std::size_t> indices;
+  for (std::size_t i = 0; i < frame.map_points.size(); ++i) {
+    const MapPoint* point = frame.map_points[i];
+    const int k = static_cast<int>(i);
+    if (point == nullptr || point->bad() || features.depth(k) <= 0.0) continue;
+    PointPair pair;
+    pair.map = point->position();
+    pair.seen = features.camera().Unproject(features.undistorted(k), features.depth(k));
+    pair.sigma_m = LiftedPointSigma(features.depth(k),
+                                    pyramid_.scale[static_cast<std::size_t>(features.octave(k))],
+                                    features.camera().fx());
+    pairs.push_back(pair);
+    indices.push_back(i);
+  }
+  const std::vector<bool> is_static = FindStaticPairs(pairs, options_.moving.rigidity);
+  int rejected = 0;
+  for (std::size_t p = 0; p < indices.size(); ++p) {
+    const std::size_t i = indices[p];
+    MapPoint* point = frame.map_points[i];
+    const bool in_map = point->num_observations() > 0;
+    if (vote && in_map) point->moving_frames = is_static[p] ? 0 : point->moving_frames + 1;
+    if (is_static[p]) continue;
+    frame.map_points[i] = nullptr;
+    frame.outlier[i] = false;
+    frame.moving[i] = true;
+    ++rejected;
+    if (vote && in_map && point->moving_frames >= options_.moving_frames_to_cull) point->SetBad();
+  }
+  return rejected;
 }
 
 bool Tracker::AsCertainAsRecentFrames() const {
@@ -502,7 +552,9 @@ void Tracker::CreateNewKeyFrame() {
   // Points from depth: every close one, and at least the 100 nearest.
   std::vector<std::pair<double, int>> by_depth;
   for (int i = 0; i < frame.size(); ++i) {
-    if (frame.features->depth(i) > 0.0) by_depth.emplace_back(frame.features->depth(i), i);
+    if (frame.features->depth(i) > 0.0 && !frame.moving[static_cast<std::size_t>(i)]) {
+      by_depth.emplace_back(frame.features->depth(i), i);
+    }
   }
   std::sort(by_depth.begin(), by_depth.end());
   int points = 0;

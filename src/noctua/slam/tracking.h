@@ -5,6 +5,7 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -33,6 +34,8 @@ struct TrackResult {
   std::string method;  // "init", "motion", "reference", "relocalisation", "" when lost
   int keypoints = 0;
   int inliers = 0;
+  // Keypoints kept out of tracking and mapping as moving (SlamOptions::reject_moving_points).
+  int moving_keypoints = 0;
   bool new_keyframe = false;
   // The pose's confidence (EstimatePoseUncertainty): 1-sigma position and rotation; infinite
   // when the frame has no pose.
@@ -78,6 +81,11 @@ class Tracker {
   bool Coast(TrackResult& result);
   void CreateNewKeyFrame();
   int DiscardOutliers();
+  // Drops the current frame's matches that move against the static world (FindStaticPairs) and
+  // flags their keypoints moving. With `vote` (once per frame, on the final matches) each such
+  // map point counts a frame of motion and is culled after moving_frames_to_cull in a row.
+  // Returns how many it dropped.
+  int RejectMovingMatches(bool vote);
   void ClearTemporaryPoints();
   void ReclaimMapPoints();
 
@@ -87,6 +95,7 @@ class Tracker {
   LocalMapper mapper_;
   Matcher matcher_;         // ratio 0.9 (ORB-SLAM's tracking)
   Matcher strict_matcher_;  // ratio 0.7 (reference keyframe, relocalisation)
+  MotionSegmenter segmenter_;
 
   TrackingState state_ = TrackingState::kNotInitialised;
   std::unique_ptr<Frame> current_;

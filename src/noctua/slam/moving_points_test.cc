@@ -1,0 +1,159 @@
+#include "noctua/slam/moving_points.h"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <random>
+
+#include "noctua/geometry/camera.h"
+#include "noctua/util/error.h"
+
+namespace noctua::slam {
+namespace {
+
+constexpr double kSigma = 0.01;
+
+// Points of a room 1-5 m in front of the camera, seen after a camera motion `world_to_camera`;
+// the points of `movers` (each a body with its own motion) are seen where their body took them.
+struct Scene {
+  std::vector<PointPair> pairs;
+  std::vector<bool> truly_static;
+};
+
+Eigen::Isometry3d Motion(double angle_deg, const Eigen::Vector3d& axis,
+                         const Eigen::Vector3d& translation) {
+  Eigen::Isometry3d motion = Eigen::Isometry3d::Identity();
+  motion.linear() = Eigen::AngleAxisd(angle_deg * M_PI / 180.0, axis.normalized()).matrix();
+  motion.translation() = translation;
+  return motion;
+}
+
+void AddBody(Scene& scene, std::mt19937& rng, int count, const Eigen::Vector3d& centre,
+             double extent, const Eigen::Isometry3d& seen_from, bool is_static) {
+  std::uniform_real_distribution<double> spread(-extent, extent);
+  std::normal_distribution<double> noise(0.0, kSigma);
+  for (int i = 0; i < count; ++i) {
+    const Eigen::Vector3d point = centre + Eigen::Vector3d(spread(rng), spread(rng), spread(rng));
+    PointPair pair;
+    pair.map = point;
+    pair.seen = seen_from * point + Eigen::Vector3d(noise(rng), noise(rng), noise(rng));
+    pair.sigma_m = kSigma;
+    scene.pairs.push_back(pair);
+    scene.truly_static.push_back(is_static);
+  }
+}
+
+TEST(FindStaticPairs, KeepsTheRoomAndDropsAPersonWhoCoversAThirdOfTheView) {
+  std::mt19937 rng(7);
+  const Eigen::Isometry3d camera = Motion(8.0, {0.2, 1.0, 0.1}, {0.3, -0.1, 0.2});
+  Scene scene;
+  AddBody(scene, rng, 200, {0.0, 0.0, 3.0}, 1.5, camera, true);
+  // The person walked 15 cm while the camera moved: seen where camera * walk puts them.
+  AddBody(scene, rng, 100, {0.2, 0.0, 1.5}, 0.25, camera * Motion(0.0, {0, 1, 0}, {0.15, 0, 0}),
+          false);
+  const std::vector<bool> is_static = FindStaticPairs(scene.pairs, RigidityOptions());
+  int kept_static = 0, kept_moving = 0;
+  for (std::size_t i = 0; i < is_static.size(); ++i) {
+    if (is_static[i] && scene.truly_static[i]) ++kept_static;
+    if (is_static[i] && !scene.truly_static[i]) ++kept_moving;
+  }
+  EXPECT_GE(kept_static, 195);  // 3-sigma agreement: a few static points may fall out
+  EXPECT_LE(kept_moving, 5);    // points near the axis of the walk barely move against the room
+}
+
+TEST(FindStaticPairs, ThreePeopleTogetherLargerThanTheRoomStillLoseToIt) {
+  // Each person is a body of their own: the room is the largest rigid set although the people's
+  // points outnumber its points.
+  std::mt19937 rng(11);
+  const Eigen::Isometry3d camera = Motion(3.0, {1.0, 0.3, 0.0}, {0.05, 0.02, -0.1});
+  Scene scene;
+  AddBody(scene, rng, 120, {0.0, 0.0, 3.5}, 1.5, camera, true);
+  AddBody(scene, rng, 70, {-0.8, 0.0, 1.5}, 0.25, camera * Motion(0, {0, 1, 0}, {0.2, 0, 0}),
+          false);
+  AddBody(scene, rng, 70, {0.0, 0.1, 2.0}, 0.25, camera * Motion(0, {0, 1, 0}, {-0.2, 0, 0.1}),
+          false);
+  AddBody(scene, rng, 70, {0.8, 0.0, 1.2}, 0.25, camera * Motion(20, {0, 1, 0}, {0, 0, 0.2}),
+          false);
+  const std::vector<bool> is_static = FindStaticPairs(scene.pairs, RigidityOptions());
+  int kept_static = 0, kept_moving = 0;
+  for (std::size_t i = 0; i < is_static.size(); ++i) {
+    if (is_static[i] && scene.truly_static[i]) ++kept_static;
+    if (is_static[i] && !scene.truly_static[i]) ++kept_moving;
+  }
+  EXPECT_GE(kept_static, 115);
+  EXPECT_LE(kept_moving, 10);
+}
+
+TEST(FindStaticPairs, AStaticSceneLosesNothingAndTooFewPairsDecideNothing) {
+  std::mt19937 rng(3);
+  Scene scene;
+  AddBody(scene, rng, 300, {0.0, 0.0, 2.5}, 1.5, Motion(30.0, {0, 1, 0}, {1.0, 0.0, 0.5}), true);
+  const std::vector<bool> is_static = FindStaticPairs(scene.pairs, RigidityOptions());
+  EXPECT_GE(std::count(is_static.begin(), is_static.end(), true), 295);
+
+  // A wrong match (a point seen 0.5 m from where it is) is dropped like a mover.
+  scene.pairs[0].seen += Eigen::Vector3d(0.5, 0.0, 0.0);
+  EXPECT_FALSE(FindStaticPairs(scene.pairs, RigidityOptions())[0]);
+
+  scene.pairs.resize(5);
+  scene.pairs[1].seen += Eigen::Vector3d(2.0, 0.0, 0.0);
+  const std::vector<bool> few = FindStaticPairs(scene.pairs, RigidityOptions());
+  EXPECT_EQ(std::count(few.begin(), few.end(), true), 5);
+
+  RigidityOptions bad;
+  bad.min_core_agreement = 0.0;
+  EXPECT_THROW(FindStaticPairs(scene.pairs, bad), Error);
+}
+
+// A frame of keypoints on a grid: a person 0.6 m wide at 1.5 m in the middle, the wall at 3 m.
+FrameFeatures PersonInFrontOfAWall(std::vector<int>& on_person) {
+  const geometry::PinholeCamera camera(
+      {.fx = 500, .fy = 500, .cx = 320, .cy = 240, .width = 640, .height = 480},
+      geometry::Distortion());
+  const cv::Rect person(220, 40, 200, 440);  // 0.6 m x 1.3 m at 1.5 m
+  cv::Mat depth(480, 640, CV_32F, cv::Scalar(3.0f));
+  depth(person).setTo(1.5f);
+  std::vector<cv::KeyPoint> keypoints;
+  for (int y = 20; y < 480; y += 40) {
+    for (int x = 20; x < 640; x += 40) {
+      if (person.contains({x, y})) on_person.push_back(static_cast<int>(keypoints.size()));
+      keypoints.emplace_back(cv::Point2f(static_cast<float>(x), static_cast<float>(y)), 31.0f);
+    }
+  }
+  const cv::Mat descriptors(static_cast<int>(keypoints.size()), 32, CV_8U, cv::Scalar(0));
+  return FrameFeatures(keypoints, descriptors, depth, camera, 40.0, 0.1);
+}
+
+TEST(GrowMovingRegions, ThreeMovingPointsTakeThePersonButNotTheWall) {
+  std::vector<int> on_person;
+  const FrameFeatures features = PersonInFrontOfAWall(on_person);
+  ASSERT_GT(on_person.size(), 30u);
+  std::vector<bool> moving(static_cast<std::size_t>(features.size()), false);
+  // Three moving points on the chest.
+  const int chest = on_person[on_person.size() / 3];
+  for (int k : {chest - 1, chest, chest + 1}) moving[static_cast<std::size_t>(k)] = true;
+  std::vector<bool> grown = moving;
+  GrowMovingRegions(features, MovingRegion(), grown);
+  int person_flagged = 0;
+  for (int k : on_person) person_flagged += grown[static_cast<std::size_t>(k)] ? 1 : 0;
+  // The region reaches 0.3 m either side and 0.9 m up and down: at 1.5 m the whole body but the
+  // feet; the wall, 1.5 m behind, is not at the person's depth.
+  EXPECT_GE(person_flagged, static_cast<int>(on_person.size() * 3 / 4));
+  EXPECT_EQ(std::count(grown.begin(), grown.end(), true), person_flagged);
+
+  // A single flagged point (a wrong match) grows nothing.
+  std::vector<bool> single(moving.size(), false);
+  single[static_cast<std::size_t>(chest)] = true;
+  GrowMovingRegions(features, MovingRegion(), single);
+  EXPECT_EQ(std::count(single.begin(), single.end(), true), 1);
+}
+
+TEST(LiftedPointSigma, GrowsWithDepthAndPyramidLevel) {
+  EXPECT_GT(LiftedPointSigma(4.0, 1.0, 525.0), 4.0 * LiftedPointSigma(1.0, 1.0, 525.0));
+  EXPECT_GT(LiftedPointSigma(1.0, 2.0, 525.0), LiftedPointSigma(1.0, 1.0, 525.0));
+  // At 1 m: 1.9 mm axial noise and 1.9 mm per pixel across the ray.
+  EXPECT_NEAR(LiftedPointSigma(1.0, 1.0, 525.0), 0.0034, 0.0002);
+}
+
+}  // namespace
+}  // namespace noctua::slam
