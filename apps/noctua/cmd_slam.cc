@@ -68,16 +68,15 @@ void RunSlam(SlamArguments args) {
   args.run.config = args.method.config;
   args.run.method = args.method.method;
   args.run.detector_model = args.method.detector_model;
-  args.run.Check();
+  // Bad settings or an empty sequence fail here, before the output folder is created.
+  eval::SlamRunner runner(args.run);
   io::PrepareOutputDir(args.out, args.force);
   const int every = std::max(1, args.progress_every);
   InterruptGuard interrupt_guard;
-  const eval::SlamRunReport report = eval::RunSlam(
-      args.run,
-      [every](int index, int count, const slam::FrameOutcome& outcome, double rss_mb) {
-        PrintProgress(every, index, count, outcome, rss_mb);
-      },
-      [] { return g_interrupted != 0; });
+  const eval::SlamRunReport report =
+      runner.Run([every](int index, int count, const slam::FrameOutcome& outcome,
+                         double rss_mb) { PrintProgress(every, index, count, outcome, rss_mb); },
+                 [] { return g_interrupted != 0; });
   const std::filesystem::path out = args.out;
   eval::WriteSlamReport(report, out);
   std::cout << report.markdown;

@@ -84,13 +84,13 @@ py::dict RunSlamOnSequence(const std::string& dataset, const std::string& config
   options.max_frames = max_frames;
   options.brightness = brightness;
   options.sequential = sequential;
-  options.Check();
+  eval::SlamRunner runner(options);  // bad input fails before the output folder is made
   const std::filesystem::path out_dir = PathArgument(out);
   if (!out_dir.empty()) io::PrepareOutputDir(out_dir, force);
   eval::SlamRunReport report;
   {
     py::gil_scoped_release release;
-    report = eval::RunSlam(options);
+    report = runner.Run();
     if (!out_dir.empty()) eval::WriteSlamReport(report, out_dir);
   }
   py::dict result;

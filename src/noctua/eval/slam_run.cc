@@ -110,23 +110,37 @@ const std::vector<std::string>& SlamReportStages() {
   return stages;
 }
 
-SlamRunReport RunSlam(const SlamRunOptions& options, const SlamProgress& progress,
-                      const std::function<bool()>& stop) {
+namespace {
+
+slam::SlamSetup CheckedSetup(const SlamRunOptions& options) {
   options.Check();
-  const slam::SlamSetup setup = slam::LoadSlamSetup(options.config);
+  return slam::LoadSlamSetup(options.config);
+}
+
+pipeline::MethodConfig RunMethodConfig(const SlamRunOptions& options) {
   pipeline::MethodConfig config =
       pipeline::LoadMethodConfig(options.config, options.detector_model);
   config.detect_ahead = !options.detect_inline;
   config.detect_ahead_options.every_n = options.detect_every;
-  const auto method = pipeline::CreateMethod(options.method, config);
-  const io::Sequence sequence =
-      io::Sequence::Open(options.dataset, {.ground_truth_convention = setup.camera.ground_truth});
+  return config;
+}
 
+}  // namespace
+
+SlamRunner::SlamRunner(const SlamRunOptions& options)
+    : options_(options),
+      setup_(CheckedSetup(options)),
+      config_(RunMethodConfig(options)),
+      method_(pipeline::CreateMethod(options.method, config_)),
+      sequence_(io::Sequence::Open(options.dataset,
+                                   {.ground_truth_convention = setup_.camera.ground_truth})) {}
+
+SlamRunReport SlamRunner::Run(const SlamProgress& progress, const std::function<bool()>& stop) {
   SlamRunReport report;
   slam::RunOptions run_options;
-  run_options.max_frames = options.max_frames;
-  run_options.overlap_extraction = !options.sequential;
-  if (const auto masks = method->detection_ahead()) {
+  run_options.max_frames = options_.max_frames;
+  run_options.overlap_extraction = !options_.sequential;
+  if (const auto masks = method_->detection_ahead()) {
     run_options.lookahead = [masks](const cv::Mat& image, const cv::Mat& depth_m) {
       masks->Submit(image, depth_m);
     };
@@ -136,23 +150,28 @@ SlamRunReport RunSlam(const SlamRunOptions& options, const SlamProgress& progres
     report.rss_mb.push_back(ResidentMemoryMb().value_or(0.0));
     if (progress) progress(index, count, outcome, report.rss_mb.back());
   };
-  if (options.brightness < 1.0) {
-    run_options.transform_image = [factor = options.brightness](int, const cv::Mat& image) {
+  if (options_.brightness < 1.0) {
+    run_options.transform_image = [factor = options_.brightness](int, const cv::Mat& image) {
       cv::Mat dark;
       image.convertTo(dark, -1, factor);
       return dark;
     };
   }
   run_options.stop = stop;
-  report.run = slam::RunSequence(sequence, setup.camera.depth_factor, setup.camera.Camera(),
-                                 method->feature2d(), setup.options, run_options);
-  report.sequence_frames = sequence.size();
-  report.json = RunJson(options, report, config, *method);
+  report.run = slam::RunSequence(sequence_, setup_.camera.depth_factor, setup_.camera.Camera(),
+                                 method_->feature2d(), setup_.options, run_options);
+  report.sequence_frames = sequence_.size();
+  report.json = RunJson(options_, report, config_, *method_);
   report.markdown =
       TimingMarkdown(SummarizeStages(report.run.frames, SlamReportStages()), report.json) +
-      CountsMarkdown(report, options.sequential);
-  AddTrajectoryErrors(sequence.ground_truth(), report);
+      CountsMarkdown(report, options_.sequential);
+  AddTrajectoryErrors(sequence_.ground_truth(), report);
   return report;
+}
+
+SlamRunReport RunSlam(const SlamRunOptions& options, const SlamProgress& progress,
+                      const std::function<bool()>& stop) {
+  return SlamRunner(options).Run(progress, stop);
 }
 
 void WriteSlamReport(const SlamRunReport& report, const std::filesystem::path& out) {

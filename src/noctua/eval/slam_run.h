@@ -2,6 +2,7 @@
 
 #include <filesystem>
 #include <functional>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -9,6 +10,7 @@
 
 #include "noctua/dynamic/async_masks.h"
 #include "noctua/eval/trajectory_error.h"
+#include "noctua/pipeline/method.h"
 #include "noctua/slam/rgbd_slam.h"
 
 namespace noctua::eval {
@@ -49,8 +51,26 @@ struct SlamRunReport {
 // The stages of FrameOutcome::stage_ms that reports list, in pipeline order.
 const std::vector<std::string>& SlamReportStages();
 
-// Runs the SLAM over the sequence and makes its report. `stop` is checked before every frame
-// (e.g. Ctrl-C): the run then ends there and the report covers the frames done.
+// A SLAM run in two steps, so that a caller can refuse bad input before it creates anything
+// (e.g. the output folder): the constructor reads the settings, creates the method and opens the
+// sequence, throwing noctua::Error for anything wrong; Run() runs the SLAM and makes the report.
+class SlamRunner {
+ public:
+  explicit SlamRunner(const SlamRunOptions& options);
+
+  // `stop` is checked before every frame (e.g. Ctrl-C): the run then ends there and the report
+  // covers the frames done.
+  SlamRunReport Run(const SlamProgress& progress = {}, const std::function<bool()>& stop = {});
+
+ private:
+  SlamRunOptions options_;
+  slam::SlamSetup setup_;
+  pipeline::MethodConfig config_;
+  std::unique_ptr<pipeline::FeatureMethod> method_;
+  io::Sequence sequence_;
+};
+
+// SlamRunner(options).Run(progress, stop).
 SlamRunReport RunSlam(const SlamRunOptions& options, const SlamProgress& progress = {},
                       const std::function<bool()>& stop = {});
 
