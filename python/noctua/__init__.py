@@ -30,6 +30,8 @@ from ._noctua import (  # noqa: F401  (the public API)
 )
 from . import _noctua
 
+Error.__module__ = __name__  # tracebacks say noctua.Error, the name users catch
+
 
 def extract(image, method="paper", config=None, mask=None, detector=None):
     """(keypoints, descriptors) of one image with one method.
