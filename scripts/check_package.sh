@@ -52,6 +52,23 @@ tracked=$(sed -n 's/.*tracked \([0-9]*\),.*/\1/p' <<<"$output")
 [ "${tracked:-0}" -ge 50 ] || fail "slam_sequence tracked ${tracked:-no} of 100 frames"
 grep -q '^ATE RMSE' <<<"$output" || fail "slam_sequence gave no ATE"
 
+if grep -q '^NOCTUA_PYTHON_INSTALL_DIR:' "$build_dir/CMakeCache.txt"; then
+  echo "check_package: the Python module from the installed prefix"
+  python_dir=$(sed -n 's/^NOCTUA_PYTHON_INSTALL_DIR:[A-Z]*=//p' "$build_dir/CMakeCache.txt")
+  [ -d "$prefix/$python_dir/noctua" ] || fail "$prefix/$python_dir/noctua is not installed"
+  # Run from the prefix so that neither the source tree nor the build can be imported instead.
+  frame_abs=$(realpath "$frame")
+  output=$(cd "$prefix" && PYTHONPATH="$prefix/$python_dir" NOCTUA_CONFIG_DIR= /usr/bin/python3 -c "
+import cv2, noctua, sys
+assert noctua.__file__.startswith('$prefix'), noctua.__file__
+keypoints, descriptors = noctua.extract(cv2.imread(sys.argv[1]), method='paper')
+assert len(keypoints) >= 500 and descriptors.shape == (len(keypoints), 32), descriptors.shape
+assert noctua.config_dir().startswith('$prefix'), noctua.config_dir()
+print(noctua.__version__, len(keypoints), 'keypoints')
+" "$frame_abs") || fail "python3 -c 'import noctua' against the installed prefix"
+  echo "  python: noctua ${output##*$'\n'}"  # its last line (spdlog may warn before it)
+fi
+
 echo "check_package: pkg-config"
 pc=$(find "$prefix" -name noctua.pc)
 [ -n "$pc" ] || fail "noctua.pc is not installed"

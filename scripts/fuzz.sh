@@ -37,7 +37,8 @@ flags="-g -O1 -fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=
 cmake -S . -B "$build_dir" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ \
   -DCMAKE_CXX_FLAGS="$flags" -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=address,undefined" \
-  -DNOCTUA_FUZZ=ON -DNOCTUA_BUILD_TESTS=OFF -DNOCTUA_BUILD_BENCHMARKS=OFF -DNOCTUA_WERROR=OFF
+  -DNOCTUA_FUZZ=ON -DNOCTUA_BUILD_TESTS=OFF -DNOCTUA_BUILD_BENCHMARKS=OFF -DNOCTUA_BUILD_PYTHON=OFF \
+  -DNOCTUA_WERROR=OFF
 cmake --build "$build_dir" --parallel "${NOCTUA_FUZZ_JOBS:-2}" \
   --target "${targets[@]/#/fuzz_}"
 

@@ -12,13 +12,14 @@
 
 #include "commands.h"
 #include "noctua/dynamic/coco.h"
+#include "noctua/dynamic/detection_overlay.h"
 #include "noctua/dynamic/detector.h"
 #include "noctua/dynamic/dynamic_mask.h"
 #include "noctua/dynamic/motion_levels.h"
 #include "noctua/io/image_file.h"
+#include "noctua/io/output_dir.h"
 #include "noctua/util/error.h"
 #include "noctua/util/timer.h"
-#include "output_dir.h"
 
 namespace noctua::app {
 namespace {
@@ -47,64 +48,6 @@ cv::Size ParseSize(const std::string& text) {
     throw Error("--input '" + text + "': expected WIDTHxHEIGHT, e.g. 320x256");
   }
   return {width, height};
-}
-
-cv::Scalar LevelColour(dynamic::MotionLevel level) {
-  switch (level) {
-    case dynamic::MotionLevel::kHigh:
-      return {40, 40, 230};
-    case dynamic::MotionLevel::kMedium:
-      return {0, 165, 255};
-    case dynamic::MotionLevel::kLow:
-      return {0, 215, 215};
-    case dynamic::MotionLevel::kStatic:
-      break;
-  }
-  return {200, 160, 60};
-}
-
-// The image with the dynamic mask tinted, instance masks outlined, and every box labelled with
-// class, score and motion level (dynamic ones in the level's colour, thicker).
-cv::Mat Overlay(const cv::Mat& image, const std::vector<dynamic::Detection>& detections,
-                const cv::Mat& dynamic_mask, const dynamic::MotionLevelTable& table,
-                const dynamic::DynamicMaskOptions& mask_options) {
-  cv::Mat bgr;
-  if (image.channels() == 1) {
-    cv::cvtColor(image, bgr, cv::COLOR_GRAY2BGR);
-  } else if (image.channels() == 4) {
-    cv::cvtColor(image, bgr, cv::COLOR_BGRA2BGR);
-  } else {
-    bgr = image.clone();
-  }
-  cv::Mat tinted = bgr.clone();
-  tinted.setTo(cv::Scalar(40, 40, 230), dynamic_mask);
-  cv::addWeighted(bgr, 0.6, tinted, 0.4, 0.0, bgr);
-  const double font = std::max(0.4, bgr.cols / 1600.0);
-  const int thin = std::max(1, bgr.cols / 640);
-  for (const auto& d : detections) {
-    const dynamic::MotionLevel level = table.Level(d.class_id);
-    const bool is_dynamic = mask_options.dynamic_levels.count(level) > 0;
-    const cv::Scalar colour = LevelColour(level);
-    if (!d.mask.empty()) {
-      std::vector<std::vector<cv::Point>> contours;
-      cv::findContours(d.mask, contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_SIMPLE);
-      cv::drawContours(bgr, contours, -1, colour, thin, cv::LINE_AA);
-    }
-    cv::rectangle(bgr, d.box, colour, is_dynamic ? 2 * thin : thin, cv::LINE_AA);
-    char label[96];
-    std::snprintf(label, sizeof(label), "%s %.2f %s", dynamic::CocoClassName(d.class_id).c_str(),
-                  d.score, dynamic::ToString(level).c_str());
-    int baseline = 0;
-    const cv::Size text = cv::getTextSize(label, cv::FONT_HERSHEY_SIMPLEX, font, thin, &baseline);
-    const cv::Point origin(cvRound(d.box.x), std::max(text.height + 4, cvRound(d.box.y)));
-    cv::rectangle(
-        bgr,
-        cv::Rect(origin.x, origin.y - text.height - 4, text.width + 4, text.height + 4 + baseline),
-        colour, cv::FILLED);
-    cv::putText(bgr, label, {origin.x + 2, origin.y - 2}, cv::FONT_HERSHEY_SIMPLEX, font,
-                cv::Scalar(255, 255, 255), thin, cv::LINE_AA);
-  }
-  return bgr;
 }
 
 void RunDetect(const DetectArgs& args) {
@@ -136,7 +79,7 @@ void RunDetect(const DetectArgs& args) {
                input.width, input.height);
 
   const fs::path out(args.out);
-  PrepareOutputDir(out, args.force);
+  io::PrepareOutputDir(out, args.force);
   nlohmann::json levels = nlohmann::json::array();
   for (auto level : mask_options.dynamic_levels) levels.push_back(dynamic::ToString(level));
   nlohmann::json summary = {{"model", args.model},
@@ -157,7 +100,7 @@ void RunDetect(const DetectArgs& args) {
     const cv::Mat mask = dynamic::BuildDynamicMask(detections, table, mask_options, image.size());
     const std::string stem = std::to_string(i) + "_" + path.stem().string();
     io::WriteImage(out / (stem + "_detect.png"),
-                   Overlay(image, detections, mask, table, mask_options));
+                   dynamic::DrawDetections(image, detections, mask, table, mask_options));
     io::WriteImage(out / (stem + "_mask.png"), mask);
     nlohmann::json found = nlohmann::json::array();
     for (const auto& d : detections) {
@@ -183,7 +126,7 @@ void RunDetect(const DetectArgs& args) {
     spdlog::info("detect: {}/{} {}: {} objects, {:.1f} ms", i + 1, args.images.size(),
                  path.string(), detections.size(), ms);
   }
-  WriteTextFileAtomically(out / "detect.json", summary.dump(2) + "\n");
+  io::WriteTextFileAtomically(out / "detect.json", summary.dump(2) + "\n");
   spdlog::info("detect: wrote overlays, masks and detect.json to {}", out.string());
 }
 

@@ -12,9 +12,9 @@
 #include "noctua/edges/edge_detector.h"
 #include "noctua/image/enhancement.h"
 #include "noctua/io/image_file.h"
+#include "noctua/io/output_dir.h"
 #include "noctua/util/error.h"
 #include "noctua/util/timer.h"
-#include "output_dir.h"
 
 namespace noctua::app {
 namespace {
@@ -85,7 +85,7 @@ void RunEdges(const EdgesArgs& args) {
   }
 
   const fs::path out(args.out);
-  PrepareOutputDir(out, args.force);
+  io::PrepareOutputDir(out, args.force);
   nlohmann::json summary = {{"enhancement", args.enhance}, {"images", nlohmann::json::array()}};
   for (std::size_t i = 0; i < args.images.size(); ++i) {
     const fs::path path(args.images[i]);
@@ -119,7 +119,7 @@ void RunEdges(const EdgesArgs& args) {
     summary["images"].push_back(entry);
     spdlog::info("edges: {}/{} {}", i + 1, args.images.size(), path.string());
   }
-  WriteTextFileAtomically(out / "edges.json", summary.dump(2) + "\n");
+  io::WriteTextFileAtomically(out / "edges.json", summary.dump(2) + "\n");
   spdlog::info("edges: wrote {} edge maps{} to {}", args.images.size() * detectors.size(),
                args.panel ? " and the comparison panel" : "", out.string());
 }

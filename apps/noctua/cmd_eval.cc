@@ -10,8 +10,8 @@
 #include "method_options.h"
 #include "noctua/eval/feature_eval.h"
 #include "noctua/io/camera_config.h"
+#include "noctua/io/output_dir.h"
 #include "noctua/util/error.h"
-#include "output_dir.h"
 
 namespace noctua::app {
 namespace {
@@ -43,7 +43,7 @@ void RunEval(EvalFlags flags) {
   for (const auto& name : flags.methods) methods.push_back(pipeline::CreateMethod(name, config));
   const eval::EvalSequence sequence(flags.dataset, io::ReadCameraConfig(camera_path));
   const fs::path out(flags.out);
-  PrepareOutputDir(out, flags.force);
+  io::PrepareOutputDir(out, flags.force);
   const eval::FeatureEvalResult result =
       eval::EvaluateFeatures(sequence, methods, flags.options,
                              [](const std::string& message) { spdlog::info("{}", message); });

@@ -8,12 +8,12 @@
 #include <opencv2/imgproc.hpp>
 
 #include "commands.h"
-#include "extraction_report.h"
 #include "method_options.h"
+#include "noctua/eval/extraction_report.h"
 #include "noctua/features/keypoint_overlay.h"
 #include "noctua/io/image_file.h"
+#include "noctua/io/output_dir.h"
 #include "noctua/util/error.h"
-#include "output_dir.h"
 
 namespace noctua::app {
 namespace {
@@ -38,7 +38,7 @@ void RunExtract(const ExtractFlags& flags) {
   auto method = pipeline::CreateMethod(flags.method.method, config);
   const cv::Mat mask = flags.mask.empty() ? cv::Mat() : ReadExclusionMask(flags.mask);
   const std::filesystem::path out_dir = flags.out;
-  PrepareOutputDir(out_dir, flags.force);
+  io::PrepareOutputDir(out_dir, flags.force);
 
   nlohmann::json summary;
   summary["method"] = method->name();
@@ -70,16 +70,16 @@ void RunExtract(const ExtractFlags& flags) {
                                 " points, " + cv::format("%.1f ms", result.stats.total_ms);
     io::WriteImage(overlay_path, features::DrawKeypointsByLevel(image, result.keypoints, caption));
 
-    nlohmann::json entry = StatsToJson(result.stats);
+    nlohmann::json entry = eval::StatsToJson(result.stats);
     entry["image"] = image_path;
     entry["keypoints"] = result.keypoints.size();
     entry["overlay"] = overlay_path.filename().string();
     summary["images"].push_back(entry);
     std::cout << image_path << ": " << result.keypoints.size() << " points ("
-              << StageCountsLine(result.stats) << "), "
+              << eval::StageCountsLine(result.stats) << "), "
               << cv::format("%.1f ms", result.stats.total_ms) << "\n";
   }
-  WriteTextFileAtomically(out_dir / "summary.json", summary.dump(2) + "\n");
+  io::WriteTextFileAtomically(out_dir / "summary.json", summary.dump(2) + "\n");
   std::cout << "wrote " << flags.images.size() << " overlay(s) and summary.json to "
             << out_dir.string() << "\n";
 }

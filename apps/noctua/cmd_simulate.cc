@@ -14,9 +14,9 @@
 #include "noctua/image/enhancement.h"
 #include "noctua/io/camera_config.h"
 #include "noctua/io/image_file.h"
+#include "noctua/io/output_dir.h"
 #include "noctua/sim/sequence.h"
 #include "noctua/util/error.h"
-#include "output_dir.h"
 
 namespace noctua::app {
 namespace {
@@ -87,7 +87,7 @@ void RunSimulate(const SimulateFlags& flags) {
   options.max_frames = flags.max_frames;
   options.Check();
   const fs::path out(flags.out);
-  PrepareOutputDir(out, flags.force);
+  io::PrepareOutputDir(out, flags.force);
   const sim::SimulationReport report =
       sim::SimulateSequence(flags.dataset, camera, options, out, [](int done, int total) {
         if (done % 25 == 0 || done == total) spdlog::info("simulated {}/{} frames", done, total);
@@ -107,7 +107,7 @@ void RunSimulate(const SimulateFlags& flags) {
                          {"person_distance_m", options.person_options.distance_m},
                          {"person_cutout", flags.person_cutout},
                          {"person_mean_coverage", report.person_pixels}};
-  WriteTextFileAtomically(out / "simulation.json", json.dump(2) + "\n");
+  io::WriteTextFileAtomically(out / "simulation.json", json.dump(2) + "\n");
   std::cout << "simulated " << report.frames << " frames into " << out.string()
             << " (mean grey ratio " << report.measured_mean_ratio << ", light factor "
             << report.brightness << (options.person ? ", with the walking person" : "") << ")\n";

@@ -10,8 +10,8 @@
 #include "noctua/eval/trajectory_plot.h"
 #include "noctua/eval/trajectory_report.h"
 #include "noctua/io/ground_truth.h"
+#include "noctua/io/output_dir.h"
 #include "noctua/io/trajectory.h"
-#include "output_dir.h"
 
 namespace noctua::app {
 namespace {
@@ -41,13 +41,13 @@ struct ErrorReport {
 void WriteErrorReport(const std::string& name, const TrajectoryFiles& files, ErrorReport report) {
   std::cout << report.table;
   if (files.out.empty()) return;
-  PrepareOutputDir(files.out, files.force);
+  io::PrepareOutputDir(files.out, files.force);
   const std::filesystem::path out = files.out;
   report.json["ground_truth"] = files.ground_truth;
   report.json["estimate"] = files.estimate;
   report.json["ground_truth_convention"] = files.convention;
-  WriteTextFileAtomically(out / (name + ".json"), report.json.dump(2) + "\n");
-  WriteTextFileAtomically(out / (name + ".md"), report.table);
+  io::WriteTextFileAtomically(out / (name + ".json"), report.json.dump(2) + "\n");
+  io::WriteTextFileAtomically(out / (name + ".md"), report.table);
   report.plot(out);
   std::cerr << name << ": wrote " << name << ".json, " << name << ".md, " << report.plot_files
             << " in " << files.out << "\n";

@@ -1,8 +1,6 @@
 #include "method_options.h"
 
-#include "noctua/dynamic/dynamic_config.h"
-#include "noctua/features/extractor_config.h"
-#include "noctua/io/yaml_file.h"
+#include "noctua/pipeline/method_config.h"
 
 namespace noctua::app {
 
@@ -18,19 +16,7 @@ void AddMethodFlags(CLI::App& command, MethodFlags& flags) {
 }
 
 pipeline::MethodConfig MethodConfigFromFlags(const MethodFlags& flags) {
-  pipeline::MethodConfig config;
-  if (!flags.config.empty()) {
-    config.extractor = features::LoadExtractorOptions(flags.config);
-    const dynamic::DynamicConfig dynamic =
-        dynamic::DynamicConfigFromYaml(io::LoadYamlFile(flags.config), flags.config);
-    config.detector_model = dynamic.model.string();
-    config.detector = dynamic.detector;
-    config.motion_levels = dynamic.motion_levels;
-    config.dynamic_mask = dynamic.mask;
-  }
-  if (!flags.detector_model.empty()) config.detector_model = flags.detector_model;
-  config.Check();
-  return config;
+  return pipeline::LoadMethodConfig(flags.config, flags.detector_model);
 }
 
 }  // namespace noctua::app

@@ -1,10 +1,10 @@
-#include "output_dir.h"
+#include "noctua/io/output_dir.h"
 
 #include <fstream>
 
 #include "noctua/util/error.h"
 
-namespace noctua::app {
+namespace noctua::io {
 
 void PrepareOutputDir(const std::filesystem::path& dir, bool force) {
   std::error_code error;
@@ -38,4 +38,4 @@ void WriteTextFileAtomically(const std::filesystem::path& path, const std::strin
   if (error) ThrowFileError(path, "cannot move the finished file into place: " + error.message());
 }
 
-}  // namespace noctua::app
+}  // namespace noctua::io

@@ -3,7 +3,7 @@
 #include <filesystem>
 #include <string>
 
-namespace noctua::app {
+namespace noctua::io {
 
 // Makes `dir` ready to receive a command's outputs. An existing, non-empty folder is refused
 // unless `force` is set, so that nothing a user owns is overwritten by accident. Throws
@@ -14,4 +14,4 @@ void PrepareOutputDir(const std::filesystem::path& dir, bool force);
 // half-written result behind. Throws noctua::Error naming the file on failure.
 void WriteTextFileAtomically(const std::filesystem::path& path, const std::string& text);
 
-}  // namespace noctua::app
+}  // namespace noctua::io

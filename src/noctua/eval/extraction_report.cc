@@ -1,6 +1,6 @@
-#include "extraction_report.h"
+#include "noctua/eval/extraction_report.h"
 
-namespace noctua::app {
+namespace noctua::eval {
 
 nlohmann::json StatsToJson(const features::ExtractionStats& stats) {
   nlohmann::json json;
@@ -24,4 +24,4 @@ std::string StageCountsLine(const features::ExtractionStats& stats) {
                               : "");
 }
 
-}  // namespace noctua::app
+}  // namespace noctua::eval

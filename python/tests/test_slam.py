@@ -1,0 +1,60 @@
+import cv2
+import numpy as np
+import pytest
+
+import noctua
+
+
+def frames(sequence, count):
+    """(timestamp, rgb path, depth path) of the first frames, paired as associate.py does."""
+    def listing(name):
+        rows = []
+        for line in (sequence / f"{name}.txt").read_text().splitlines():
+            if line and not line.startswith("#"):
+                t, path = line.split()[:2]
+                rows.append((float(t), sequence / path))
+        return rows
+
+    depths = listing("depth")
+    pairs = []
+    for t, rgb in listing("rgb")[:count]:
+        dt, depth = min(depths, key=lambda d: abs(d[0] - t))
+        if abs(dt - t) < 0.02:
+            pairs.append((t, rgb, depth))
+    return pairs
+
+
+def test_frame_by_frame_slam_follows_the_ground_truth(tum_sequence, tum_config):
+    slam = noctua.Slam(tum_config, method="paper")
+    poses = []
+    for t, rgb, depth in frames(tum_sequence, 30):
+        pose = slam.track(cv2.imread(str(rgb)), cv2.imread(str(depth), cv2.IMREAD_UNCHANGED), t)
+        if pose is not None:
+            assert pose.shape == (4, 4)
+            poses.append(pose)
+    assert len(poses) >= 25
+    assert slam.last_result["state"] in ("ok", "coasting")
+    assert slam.keyframes >= 1
+    trajectory = slam.trajectory()
+    assert len(trajectory) == len(poses)
+    result = noctua.ate(trajectory, tum_sequence / "groundtruth.txt")
+    assert result["rmse"] < 0.1, result["rmse"]
+
+
+def test_whole_sequence_run_writes_the_report(tum_sequence, tum_config, tmp_path):
+    out = tmp_path / "slam"
+    result = noctua.run_slam(tum_sequence, tum_config, method="orb", max_frames=30, out=out)
+    report = result["report"]
+    assert report["frames"] == 30
+    assert len(result["trajectory"]) == report["tracked_frames"] >= 25
+    assert report["ate"]["translation_m"]["rmse"] < 0.1
+    assert (out / "trajectory.txt").exists() and (out / "report.json").exists()
+    assert result["frames_csv"].startswith("frame,timestamp,state")
+
+
+def test_bad_slam_input_is_explained(tum_config, tmp_path):
+    with pytest.raises(noctua.Error, match="no_such_settings.yaml"):
+        noctua.Slam(tmp_path / "no_such_settings.yaml")
+    slam = noctua.Slam(tum_config, method="orb")
+    with pytest.raises(noctua.Error, match="depth"):
+        slam.track(np.zeros((480, 640, 3), np.uint8), np.zeros((480, 640), np.uint8), 0.0)

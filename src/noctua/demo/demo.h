@@ -1,0 +1,42 @@
+#pragma once
+
+#include <filesystem>
+#include <functional>
+#include <iosfwd>
+#include <opencv2/core.hpp>
+#include <string>
+
+namespace noctua::demo {
+
+// A desk-like scene: textured posters, books, a checkerboard and text on a lit wall, and a
+// person-shaped region that the paper's dynamic filter must clear.
+struct DemoScene {
+  cv::Mat image;        // 640x480 BGR
+  cv::Mat person_mask;  // CV_8U, 255 on the person
+};
+DemoScene MakeDemoScene(unsigned seed);
+
+// How the demo darkens its scene: image, share of the mean grey left (0.15 = "15%"), seed.
+using DarkenFunction = std::function<cv::Mat(const cv::Mat&, double, unsigned)>;
+
+struct DemoOptions {
+  unsigned seed = 7;      // of the generated scene and the darkening's noise
+  DarkenFunction darken;  // required
+
+  // Throws noctua::Error naming the first invalid field.
+  void Check() const;
+};
+
+// What `noctua demo` shows: extraction on the scene in normal light and at 15% (overlays,
+// summary.md, summary.json), then the scene as a 24-frame sequence evaluated end to end
+// (evaluation.md, eval_*/), all written into `out_dir` (which must exist). The tables go to `log`
+// as they are ready (the evaluation takes a while); returns them all.
+std::string RunDemo(const DemoOptions& options, const std::filesystem::path& out_dir,
+                    std::ostream& log);
+
+// End to end on a short generated sequence: `scene` on a wall seen by a moving camera (exact
+// depth and poses), made dark (15%) with the walking person, then the feature evaluation judged
+// by that ground truth. Returns the summary tables.
+std::string EvaluateDemoSequence(const cv::Mat& scene, const std::filesystem::path& out_dir);
+
+}  // namespace noctua::demo

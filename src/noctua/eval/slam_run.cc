@@ -1,0 +1,255 @@
+#include "noctua/eval/slam_run.h"
+
+#include <cmath>
+#include <cstdio>
+#include <memory>
+
+#include "noctua/eval/trajectory_plot.h"
+#include "noctua/eval/trajectory_report.h"
+#include "noctua/io/output_dir.h"
+#include "noctua/pipeline/method.h"
+#include "noctua/pipeline/method_config.h"
+#include "noctua/util/error.h"
+#include "noctua/util/memory_usage.h"
+#include "noctua/util/timer.h"
+
+namespace noctua::eval {
+namespace {
+
+nlohmann::json RunJson(const SlamRunOptions& options, const SlamRunReport& report,
+                       const pipeline::MethodConfig& config,
+                       const pipeline::FeatureMethod& method) {
+  const slam::SequenceRun& run = report.run;
+  nlohmann::json json;
+  json["dataset"] = options.dataset.string();
+  json["config"] = options.config.string();
+  json["method"] = options.method;
+  json["brightness"] = options.brightness;
+  json["reject_moving_points"] = options.reject_moving_points;
+  json["frames"] = run.frames.size();
+  json["tracked_frames"] = run.trajectory.size();
+  json["lost_frames"] = run.lost_frames.size();
+  json["lost_frame_indices"] = run.lost_frames;
+  json["coasted_frames"] = run.coasted_frames.size();
+  json["coasted_frame_indices"] = run.coasted_frames;
+  json["keyframes"] = run.keyframes;
+  json["map_points"] = run.map_points;
+  json["interrupted"] = run.interrupted;
+  json["wall_s"] = run.wall_s;
+  json["frames_per_second"] = run.FramesPerSecond();
+  json["overlap_extraction"] = !options.sequential;
+  if (!config.detector_model.empty()) {
+    const bool ahead = method.detection_ahead() != nullptr;
+    json["detection"] = {{"model", config.detector_model},
+                         {"mode", ahead ? "own thread, frames submitted ahead" : "inline"},
+                         {"every_n_frames", ahead ? options.detect_every : 1}};
+  }
+  // Memory next to the map size, so that a long run shows whether memory follows the map.
+  json["memory"] = {{"peak_rss_mb", PeakResidentMemoryMb()},
+                    {"final_rss_mb", report.rss_mb.empty() ? 0.0 : report.rss_mb.back()},
+                    {"keyframes", run.keyframes},
+                    {"map_points", run.map_points},
+                    {"keyframes_created", run.keyframes_created},
+                    {"map_points_created", run.map_points_created},
+                    {"map_points_allocated", run.map_points_allocated}};
+  return json;
+}
+
+std::string TimingMarkdown(const std::vector<StageTiming>& timing, nlohmann::json& json) {
+  std::string markdown = "| stage | median ms | mean ms | max ms |\n|---|---|---|---|\n";
+  char row[160];
+  for (const StageTiming& t : timing) {
+    json["timing_ms"][t.stage] = {{"median", t.median_ms}, {"mean", t.mean_ms}, {"max", t.max_ms}};
+    std::snprintf(row, sizeof(row), "| %s | %.2f | %.2f | %.2f |\n", t.stage.c_str(), t.median_ms,
+                  t.mean_ms, t.max_ms);
+    markdown += row;
+  }
+  return markdown;
+}
+
+std::string CountsMarkdown(const SlamRunReport& report, bool sequential) {
+  const slam::SequenceRun& run = report.run;
+  char counts[320];
+  std::snprintf(
+      counts, sizeof(counts),
+      "\nframes %zu, with a pose %zu (coasting %zu), lost %zu, keyframes %d, map points %d, "
+      "peak RSS %.1f MB\n"
+      "%.1f frames/s (%.2f s for the run, loading included, %s)\n",
+      run.frames.size(), run.trajectory.size(), run.coasted_frames.size(), run.lost_frames.size(),
+      run.keyframes, run.map_points, PeakResidentMemoryMb(), run.FramesPerSecond(), run.wall_s,
+      sequential ? "sequential" : "extraction overlapped with tracking");
+  return counts;
+}
+
+// ATE and RPE against the sequence's ground truth, into the report.
+void AddTrajectoryErrors(const io::Trajectory& ground_truth, SlamRunReport& report) {
+  if (ground_truth.empty() || report.run.trajectory.size() < 3) return;
+  report.ate = ComputeAte(ground_truth, report.run.trajectory);
+  report.json["ate"] = ToJson(*report.ate);
+  report.markdown.append("\n").append(FormatAteMarkdown(*report.ate));
+  try {
+    report.rpe = ComputeRpe(ground_truth, report.run.trajectory);
+    report.json["rpe"] = ToJson(*report.rpe);
+    report.markdown += FormatRpeMarkdown(*report.rpe, 1.0);
+  } catch (const Error& error) {
+    report.json["rpe"] = {{"error", error.what()}};
+  }
+}
+
+}  // namespace
+
+void SlamRunOptions::Check() const {
+  CheckOption(brightness > 0.0 && brightness <= 1.0, "brightness must be in (0, 1]");
+  CheckOption(max_frames >= 0, "max_frames must not be negative");
+  CheckOption(detect_every >= 1, "detect_every must be at least 1");
+  CheckOption(!config.empty(), "the SLAM needs a settings file (a camera preset, see config/)");
+}
+
+const std::vector<std::string>& SlamReportStages() {
+  static const std::vector<std::string> stages = {"load",      "extract", "track",
+                                                  "local_map", "mapping", "total"};
+  return stages;
+}
+
+namespace {
+
+slam::SlamSetup CheckedSetup(const SlamRunOptions& options) {
+  options.Check();
+  slam::SlamSetup setup = slam::LoadSlamSetup(options.config);
+  setup.options.reject_moving_points = options.reject_moving_points;
+  return setup;
+}
+
+pipeline::MethodConfig RunMethodConfig(const SlamRunOptions& options) {
+  pipeline::MethodConfig config =
+      pipeline::LoadMethodConfig(options.config, options.detector_model);
+  config.detect_ahead = !options.detect_inline;
+  config.detect_ahead_options.every_n = options.detect_every;
+  return config;
+}
+
+}  // namespace
+
+SlamRunner::SlamRunner(const SlamRunOptions& options)
+    : options_(options),
+      setup_(CheckedSetup(options)),
+      config_(RunMethodConfig(options)),
+      method_(pipeline::CreateMethod(options.method, config_)),
+      sequence_(io::Sequence::Open(options.dataset,
+                                   {.ground_truth_convention = setup_.camera.ground_truth})) {}
+
+SlamRunReport SlamRunner::Run(const SlamProgress& progress, const std::function<bool()>& stop) {
+  SlamRunReport report;
+  slam::RunOptions run_options;
+  run_options.max_frames = options_.max_frames;
+  run_options.overlap_extraction = !options_.sequential;
+  if (const auto masks = method_->detection_ahead()) {
+    run_options.lookahead = [masks](const cv::Mat& image, const cv::Mat& depth_m) {
+      masks->Submit(image, depth_m);
+    };
+  }
+  // Resident memory after every frame (reading /proc/self/statm costs microseconds).
+  run_options.progress = [&](int index, int count, const slam::FrameOutcome& outcome) {
+    report.rss_mb.push_back(ResidentMemoryMb().value_or(0.0));
+    if (progress) progress(index, count, outcome, report.rss_mb.back());
+  };
+  if (options_.brightness < 1.0) {
+    run_options.transform_image = [factor = options_.brightness](int, const cv::Mat& image) {
+      cv::Mat dark;
+      image.convertTo(dark, -1, factor);
+      return dark;
+    };
+  }
+  run_options.stop = stop;
+  report.run = slam::RunSequence(sequence_, setup_.camera.depth_factor, setup_.camera.Camera(),
+                                 method_->feature2d(), setup_.options, run_options);
+  report.sequence_frames = sequence_.size();
+  report.json = RunJson(options_, report, config_, *method_);
+  report.markdown =
+      TimingMarkdown(SummarizeStages(report.run.frames, SlamReportStages()), report.json) +
+      CountsMarkdown(report, options_.sequential);
+  AddTrajectoryErrors(sequence_.ground_truth(), report);
+  return report;
+}
+
+SlamRunReport RunSlam(const SlamRunOptions& options, const SlamProgress& progress,
+                      const std::function<bool()>& stop) {
+  return SlamRunner(options).Run(progress, stop);
+}
+
+void WriteSlamReport(const SlamRunReport& report, const std::filesystem::path& out) {
+  io::WriteTextFileAtomically(out / "trajectory.txt",
+                              io::FormatTumTrajectory(report.run.trajectory));
+  io::WriteTextFileAtomically(out / "frames.csv",
+                              FramesCsv(report.run, SlamReportStages(), report.rss_mb));
+  io::WriteTextFileAtomically(out / "report.json", report.json.dump(2) + "\n");
+  io::WriteTextFileAtomically(out / "report.md", report.markdown);
+  if (report.ate) PlotAte(*report.ate, out, "ate");
+  if (report.rpe) PlotRpe(*report.rpe, out, "rpe");
+}
+
+const char* TrackingStateName(slam::TrackingState state) {
+  switch (state) {
+    case slam::TrackingState::kNotInitialised:
+      return "not-initialised";
+    case slam::TrackingState::kOk:
+      return "ok";
+    case slam::TrackingState::kCoasting:
+      return "coasting";
+    case slam::TrackingState::kLost:
+      return "lost";
+  }
+  return "unknown";
+}
+
+std::string FramesCsv(const slam::SequenceRun& run, const std::vector<std::string>& stages,
+                      const std::vector<double>& rss_mb) {
+  std::string csv =
+      "frame,timestamp,state,method,keypoints,inliers,moving_keypoints,position_sigma_mm,"
+      "rotation_sigma_deg,keyframe,keyframes,map_points,rss_mb";
+  for (const auto& stage : stages) csv.append(",").append(stage).append("_ms");
+  csv += "\n";
+  char buffer[192];
+  for (std::size_t i = 0; i < run.frames.size(); ++i) {
+    const slam::FrameOutcome& f = run.frames[i];
+    // A frame without a pose has no confidence: its sigma columns stay empty.
+    char sigma[64] = ",";
+    if (std::isfinite(f.position_sigma_m)) {
+      std::snprintf(sigma, sizeof(sigma), "%.2f,%.3f", 1000.0 * f.position_sigma_m,
+                    f.rotation_sigma_deg);
+    }
+    std::snprintf(buffer, sizeof(buffer), "%zu,%.6f,%s,%s,%d,%d,%d,%s,%d,%d,%d,%.1f", i,
+                  f.timestamp, TrackingStateName(f.state), f.method.c_str(), f.keypoints, f.inliers,
+                  f.moving_keypoints, sigma, f.new_keyframe ? 1 : 0, f.keyframes, f.map_points,
+                  i < rss_mb.size() ? rss_mb[i] : 0.0);
+    csv += buffer;
+    for (const auto& stage : stages) {
+      const auto found = f.stage_ms.find(stage);
+      std::snprintf(buffer, sizeof(buffer), ",%.3f",
+                    found == f.stage_ms.end() ? 0.0 : found->second);
+      csv += buffer;
+    }
+    csv += "\n";
+  }
+  return csv;
+}
+
+std::vector<StageTiming> SummarizeStages(const std::vector<slam::FrameOutcome>& frames,
+                                         const std::vector<std::string>& stages) {
+  std::vector<StageTiming> timing;
+  for (const auto& stage : stages) {
+    std::vector<double> samples;
+    for (const auto& frame : frames) {
+      const auto found = frame.stage_ms.find(stage);
+      if (found != frame.stage_ms.end()) samples.push_back(found->second);
+    }
+    double sum = 0.0;
+    for (double sample : samples) sum += sample;
+    const double mean = samples.empty() ? 0.0 : sum / static_cast<double>(samples.size());
+    const TimingSummary summary = Summarize(samples);
+    timing.push_back({stage, summary.median_ms, mean, summary.max_ms});
+  }
+  return timing;
+}
+
+}  // namespace noctua::eval

@@ -1,0 +1,100 @@
+#pragma once
+
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "noctua/dynamic/async_masks.h"
+#include "noctua/eval/trajectory_error.h"
+#include "noctua/pipeline/method.h"
+#include "noctua/slam/rgbd_slam.h"
+
+namespace noctua::eval {
+
+// A SLAM run over a sequence as `noctua slam` and Python's noctua.run_slam make it.
+struct SlamRunOptions {
+  std::filesystem::path dataset;  // TUM RGB-D or OpenLORIS folder
+  std::filesystem::path config;   // settings file: camera, SLAM and extractor (required)
+  std::string method = "paper";
+  std::string detector_model;  // "" = the settings file's model, if any
+  int max_frames = 0;          // 0: all
+  double brightness = 1.0;     // grey values of every frame scaled by this, in (0, 1]
+  bool sequential = false;     // extract a frame only after the previous one is tracked
+  // The detector: on a thread of its own on every detect_every-th frame, unless detect_inline
+  // (in the extraction, every frame).
+  int detect_every = dynamic::AsyncMaskOptions().every_n;
+  bool detect_inline = false;
+  // Model-free rejection of moving points (slam::SlamOptions::reject_moving_points).
+  bool reject_moving_points = false;
+
+  // Throws noctua::Error naming the first invalid field.
+  void Check() const;
+};
+
+// Called after every frame with its index, the frame count, its outcome and the resident memory.
+using SlamProgress =
+    std::function<void(int index, int count, const slam::FrameOutcome&, double rss_mb)>;
+
+// A finished run with its report.
+struct SlamRunReport {
+  slam::SequenceRun run;
+  std::vector<double> rss_mb;  // resident memory after each frame
+  std::size_t sequence_frames = 0;
+  std::optional<AteResult> ate;  // with ground truth and at least 3 poses
+  std::optional<RpeResult> rpe;
+  nlohmann::json json;   // report.json
+  std::string markdown;  // report.md
+};
+
+// The stages of FrameOutcome::stage_ms that reports list, in pipeline order.
+const std::vector<std::string>& SlamReportStages();
+
+// A SLAM run in two steps, so that a caller can refuse bad input before it creates anything
+// (e.g. the output folder): the constructor reads the settings, creates the method and opens the
+// sequence, throwing noctua::Error for anything wrong; Run() runs the SLAM and makes the report.
+class SlamRunner {
+ public:
+  explicit SlamRunner(const SlamRunOptions& options);
+
+  // `stop` is checked before every frame (e.g. Ctrl-C): the run then ends there and the report
+  // covers the frames done.
+  SlamRunReport Run(const SlamProgress& progress = {}, const std::function<bool()>& stop = {});
+
+ private:
+  SlamRunOptions options_;
+  slam::SlamSetup setup_;
+  pipeline::MethodConfig config_;
+  std::unique_ptr<pipeline::FeatureMethod> method_;
+  io::Sequence sequence_;
+};
+
+// SlamRunner(options).Run(progress, stop).
+SlamRunReport RunSlam(const SlamRunOptions& options, const SlamProgress& progress = {},
+                      const std::function<bool()>& stop = {});
+
+// Writes trajectory.txt (TUM), frames.csv, report.json, report.md and, with ground truth, the
+// ATE/RPE plots into `out` (which must exist).
+void WriteSlamReport(const SlamRunReport& report, const std::filesystem::path& out);
+
+// frames.csv: one row per frame (state, counts, confidence, map size, memory, stage times).
+std::string FramesCsv(const slam::SequenceRun& run, const std::vector<std::string>& stages,
+                      const std::vector<double>& rss_mb);
+
+// Median, mean and max of each stage over the frames that have it. The mean too: mapping runs
+// on keyframes only, so its median is ~0 while its mean is what it costs per frame.
+struct StageTiming {
+  std::string stage;
+  double median_ms = 0.0;
+  double mean_ms = 0.0;
+  double max_ms = 0.0;
+};
+std::vector<StageTiming> SummarizeStages(const std::vector<slam::FrameOutcome>& frames,
+                                         const std::vector<std::string>& stages);
+
+const char* TrackingStateName(slam::TrackingState state);
+
+}  // namespace noctua::eval
