@@ -107,8 +107,9 @@ TrackResult Tracker::Track(Frame frame) {
     ClearTemporaryPoints();
   }
   if (state_ == TrackingState::kNotInitialised && ok) state_ = TrackingState::kOk;
+  result.moving = current_->moving;
   result.moving_keypoints =
-      static_cast<int>(std::count(current_->moving.begin(), current_->moving.end(), true));
+      static_cast<int>(std::count(result.moving.begin(), result.moving.end(), true));
 
   FrameRecord record;
   record.frame_id = current_->id;

@@ -34,8 +34,10 @@ struct TrackResult {
   std::string method;  // "init", "motion", "reference", "relocalisation", "" when lost
   int keypoints = 0;
   int inliers = 0;
-  // Keypoints kept out of tracking and mapping as moving (SlamOptions::reject_moving_points).
+  // Keypoints kept out of tracking and mapping as moving (SlamOptions::reject_moving_points):
+  // how many, and one flag per keypoint of the frame.
   int moving_keypoints = 0;
+  std::vector<bool> moving;
   bool new_keyframe = false;
   // The pose's confidence (EstimatePoseUncertainty): 1-sigma position and rotation; infinite
   // when the frame has no pose.
