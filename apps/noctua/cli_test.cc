@@ -256,6 +256,23 @@ TEST_F(CliTest, SimulateThenEvalWriteATumSequenceAndTheReport) {
   EXPECT_THAT(no_truth.output, HasSubstr("groundtruth"));
 }
 
+TEST_F(CliTest, SimulateListsTheSensorModelsAndRefusesAnUnknownOne) {
+  const CommandResult listed = RunNoctua("simulate --list-sensors");
+  ASSERT_EQ(listed.exit_code, 0) << listed.output;
+  for (const char* name : {"| webcam |", "| kinect |", "| d435 |", "| large-pixel |"}) {
+    EXPECT_THAT(listed.output, HasSubstr(name));
+  }
+  const std::string fr1 = (noctua::testing::DataDir() / "tum_fr1_rpy_200").string();
+  const CommandResult unknown =
+      RunNoctua("simulate --dataset " + fr1 + " --camera " + NOCTUA_SOURCE_DIR +
+                "/config/tum_fr1.yaml --level 15 --sensor potato --out " + (dir_ / "p").string());
+  EXPECT_EQ(unknown.exit_code, 1);
+  EXPECT_THAT(unknown.output, HasSubstr("unknown sensor model 'potato'"));
+  const CommandResult no_dataset = RunNoctua("simulate --level 15 --out " + (dir_ / "q").string());
+  EXPECT_EQ(no_dataset.exit_code, 1);
+  EXPECT_THAT(no_dataset.output, HasSubstr("simulate needs --dataset"));
+}
+
 TEST_F(CliTest, SimulateCompositesARealPersonCutOutGivenByAMaskOrFoundByTheSegmenter) {
   const std::string fr1 = (noctua::testing::DataDir() / "tum_fr1_rpy_200").string();
   const std::string camera = std::string(NOCTUA_SOURCE_DIR) + "/config/tum_fr1.yaml";

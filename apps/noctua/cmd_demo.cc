@@ -14,6 +14,7 @@
 #include "noctua/io/camera_config.h"
 #include "noctua/io/image_file.h"
 #include "noctua/pipeline/method.h"
+#include "noctua/sim/low_light.h"
 #include "noctua/sim/plane_scene.h"
 #include "noctua/sim/sequence.h"
 #include "noctua/util/error.h"
@@ -87,31 +88,6 @@ DemoScene MakeScene(unsigned seed) {
   return scene;
 }
 
-// Low light as a camera records it: linear light scaled down, shot and read noise, gamma, 8 bits.
-// `grey_fraction` is the share of the original mean grey value that remains (SPEC: "15%").
-cv::Mat Darken(const cv::Mat& image, double grey_fraction, unsigned seed) {
-  constexpr double kGamma = 2.2;
-  cv::Mat linear;
-  image.convertTo(linear, CV_32F, 1.0 / 255.0);
-  cv::pow(linear, kGamma, linear);
-  linear *= std::pow(grey_fraction, kGamma);
-  constexpr double kFullWellElectrons = 4000.0;
-  constexpr double kReadNoiseElectrons = 4.0;
-  cv::Mat electrons = linear * kFullWellElectrons;
-  cv::Mat noise(electrons.size(), electrons.type());
-  cv::RNG rng(seed);
-  rng.fill(noise, cv::RNG::NORMAL, 0.0, 1.0);
-  cv::Mat shot_sigma;
-  cv::sqrt(cv::max(electrons, 0.0), shot_sigma);
-  electrons += noise.mul(shot_sigma);
-  rng.fill(noise, cv::RNG::NORMAL, 0.0, kReadNoiseElectrons);
-  electrons += noise;
-  cv::Mat out = cv::max(electrons / kFullWellElectrons, 0.0);
-  cv::pow(out, 1.0 / kGamma, out);
-  out.convertTo(out, CV_8U, 255.0);
-  return out;
-}
-
 // End to end on a short generated sequence: the demo scene on a wall seen by a moving camera
 // (exact depth and poses), made dark (15%) with the walking person, then the feature evaluation
 // judged by that ground truth. Returns the summary tables.
@@ -171,8 +147,11 @@ void RunDemo(const DemoFlags& flags) {
     std::string name;
     cv::Mat image;
   };
-  const std::vector<Light> lights = {{"normal", scene.image},
-                                     {"dark-15pct", Darken(scene.image, 0.15, flags.seed)}};
+  const std::vector<Light> lights = {
+      {"normal", scene.image},
+      {"dark-15pct",
+       sim::DarkenToLevel(scene.image, 0.15, sim::SensorModelByName(sim::kDefaultSensorModel),
+                          flags.seed)}};
   const std::vector<std::string> methods = {"orb-opencv", "orb", "clahe-orb", "paper"};
 
   std::cout << "noctua demo: a generated 640x480 scene with a person, in normal light and at 15% "

@@ -12,6 +12,8 @@
 #include "noctua/eval/trajectory_plot.h"
 #include "noctua/eval/trajectory_report.h"
 #include "noctua/io/dataset.h"
+#include "noctua/io/image_file.h"
+#include "noctua/sim/low_light.h"
 #include "noctua/slam/rgbd_slam.h"
 #include "noctua/util/error.h"
 #include "noctua/util/memory_usage.h"
@@ -51,6 +53,8 @@ struct SlamArguments {
   bool force = false;
   int max_frames = 0;
   double brightness = 1.0;
+  std::string sensor = "noiseless";
+  std::uint64_t seed = 1;
   int progress_every = 20;
   bool sequential = false;
   // The detector: by default on a thread of its own, on every N-th frame, frames handed to it
@@ -147,12 +151,9 @@ void RunSlam(const SlamArguments& args) {
                  outcome.map_points, rss_mb->back());
   };
   if (args.brightness < 1.0) {
-    const double factor = args.brightness;
-    run_options.transform_image = [factor](int, const cv::Mat& image) {
-      cv::Mat dark;
-      image.convertTo(dark, -1, factor);
-      return dark;
-    };
+    run_options.transform_image =
+        sim::SequenceDarkener(io::ReadImage8U(sequence.frame(0).rgb_path), args.brightness,
+                              sim::SensorModelByName(args.sensor), args.seed);
   }
   InterruptGuard interrupt_guard;
   run_options.stop = [] { return g_interrupted != 0; };
@@ -170,6 +171,8 @@ void RunSlam(const SlamArguments& args) {
   report["config"] = args.method.config;
   report["method"] = args.method.method;
   report["brightness"] = args.brightness;
+  report["sensor"] = args.sensor;
+  report["seed"] = args.seed;
   report["frames"] = run.frames.size();
   report["tracked_frames"] = run.trajectory.size();
   report["lost_frames"] = run.lost_frames.size();
@@ -269,7 +272,15 @@ void AddSlamCommand(CLI::App& app) {
   command->add_option("--max-frames", args->max_frames, "Stop after this many frames (0: all)");
   command
       ->add_option("--brightness", args->brightness,
-                   "Scale the grey values of every frame by this factor (a simple darkening)")
+                   "Darken every frame to this share of its mean grey (1: as recorded) through "
+                   "the --sensor model")
+      ->capture_default_str();
+  command
+      ->add_option("--sensor", args->sensor,
+                   "Sensor model of --brightness: " + sim::SensorModelNames() +
+                       " (noiseless: grey values scaled)")
+      ->capture_default_str();
+  command->add_option("--seed", args->seed, "Noise seed of --brightness (frame k: seed + k)")
       ->capture_default_str();
   command->add_option("--progress-every", args->progress_every, "Frames per progress line")
       ->capture_default_str();
