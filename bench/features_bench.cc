@@ -16,6 +16,7 @@
 #include "noctua/features/pyramid.h"
 #include "noctua/features/rbrief.h"
 #include "noctua/pipeline/method.h"
+#include "noctua/sim/low_light.h"
 #include "noctua/util/timer.h"
 
 namespace {

@@ -116,6 +116,7 @@ std::string FramesCsv(const slam::SequenceRun& run, const std::vector<std::strin
 void RunSlam(const SlamArguments& args) {
   CheckOption(args.brightness > 0.0 && args.brightness <= 1.0, "--brightness must be in (0, 1]");
   CheckOption(args.max_frames >= 0, "--max-frames must not be negative");
+  const sim::SensorModel& sensor = sim::SensorModelByName(args.sensor);  // refused before a run
   CheckOption(args.detect_every >= 1, "--detect-every must be at least 1");
   if (args.method.config.empty()) throw Error("slam needs --config (a camera preset, see config/)");
   const slam::SlamSetup setup = slam::LoadSlamSetup(args.method.config);
@@ -151,9 +152,8 @@ void RunSlam(const SlamArguments& args) {
                  outcome.map_points, rss_mb->back());
   };
   if (args.brightness < 1.0) {
-    run_options.transform_image =
-        sim::SequenceDarkener(io::ReadImage8U(sequence.frame(0).rgb_path), args.brightness,
-                              sim::SensorModelByName(args.sensor), args.seed);
+    run_options.transform_image = sim::SequenceDarkener(io::ReadImage8U(sequence.frame(0).rgb_path),
+                                                        args.brightness, sensor, args.seed);
   }
   InterruptGuard interrupt_guard;
   run_options.stop = [] { return g_interrupted != 0; };
