@@ -256,6 +256,23 @@ TEST_F(CliTest, SimulateThenEvalWriteATumSequenceAndTheReport) {
   EXPECT_THAT(no_truth.output, HasSubstr("groundtruth"));
 }
 
+TEST_F(CliTest, SimulateListsTheSensorModelsAndRefusesAnUnknownOne) {
+  const CommandResult listed = RunNoctua("simulate --list-sensors");
+  ASSERT_EQ(listed.exit_code, 0) << listed.output;
+  for (const char* name : {"| webcam |", "| kinect |", "| d435 |", "| large-pixel |"}) {
+    EXPECT_THAT(listed.output, HasSubstr(name));
+  }
+  const std::string fr1 = (noctua::testing::DataDir() / "tum_fr1_rpy_200").string();
+  const CommandResult unknown =
+      RunNoctua("simulate --dataset " + fr1 + " --camera " + NOCTUA_SOURCE_DIR +
+                "/config/tum_fr1.yaml --level 15 --sensor potato --out " + (dir_ / "p").string());
+  EXPECT_EQ(unknown.exit_code, 1);
+  EXPECT_THAT(unknown.output, HasSubstr("unknown sensor model 'potato'"));
+  const CommandResult no_dataset = RunNoctua("simulate --level 15 --out " + (dir_ / "q").string());
+  EXPECT_EQ(no_dataset.exit_code, 1);
+  EXPECT_THAT(no_dataset.output, HasSubstr("simulate needs --dataset"));
+}
+
 TEST_F(CliTest, SimulateCompositesARealPersonCutOutGivenByAMaskOrFoundByTheSegmenter) {
   const std::string fr1 = (noctua::testing::DataDir() / "tum_fr1_rpy_200").string();
   const std::string camera = std::string(NOCTUA_SOURCE_DIR) + "/config/tum_fr1.yaml";
@@ -397,19 +414,21 @@ TEST_F(CliTest, SlamReportsMemoryAndMapSize) {
     last = line;
   }
   EXPECT_EQ(rows, 12);
-  // The last row's map size is the report's: columns 9 and 10 (keyframes, map_points); a tracked
-  // frame's confidence in columns 6 and 7 (position sigma in mm, rotation sigma in degrees).
+  // The last row's map size is the report's: columns 10 and 11 (keyframes, map_points); a tracked
+  // frame's moving keypoints in column 6 (none: rejection is off by default) and its confidence
+  // in columns 7 and 8 (position sigma in mm, rotation sigma in degrees).
   std::vector<std::string> cells;
   std::stringstream cells_in(last);
   for (std::string cell; std::getline(cells_in, cell, ',');) cells.push_back(cell);
-  ASSERT_GT(cells.size(), 11u);
+  ASSERT_GT(cells.size(), 12u);
   EXPECT_EQ(cells[2], "ok");
-  EXPECT_GT(std::stod(cells[6]), 0.0);
-  EXPECT_LT(std::stod(cells[6]), 20.0);
+  EXPECT_EQ(cells[6], "0");
   EXPECT_GT(std::stod(cells[7]), 0.0);
-  EXPECT_EQ(std::stoi(cells[9]), report["keyframes"].get<int>());
-  EXPECT_EQ(std::stoi(cells[10]), report["map_points"].get<int>());
-  EXPECT_GT(std::stod(cells[11]), 10.0);
+  EXPECT_LT(std::stod(cells[7]), 20.0);
+  EXPECT_GT(std::stod(cells[8]), 0.0);
+  EXPECT_EQ(std::stoi(cells[10]), report["keyframes"].get<int>());
+  EXPECT_EQ(std::stoi(cells[11]), report["map_points"].get<int>());
+  EXPECT_GT(std::stod(cells[12]), 10.0);
 }
 
 // With a detector, the SLAM detects on a thread of its own every N-th frame by default, says so in

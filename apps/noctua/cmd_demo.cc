@@ -1,5 +1,4 @@
 // noctua demo: the extractor on a scene it draws itself, in normal and low light.
-#include <cmath>
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -18,31 +17,6 @@ struct DemoFlags {
   unsigned seed = 7;
 };
 
-// Low light as a camera records it: linear light scaled down, shot and read noise, gamma, 8 bits.
-// `grey_fraction` is the share of the original mean grey value that remains (SPEC: "15%").
-cv::Mat Darken(const cv::Mat& image, double grey_fraction, unsigned seed) {
-  constexpr double kGamma = 2.2;
-  cv::Mat linear;
-  image.convertTo(linear, CV_32F, 1.0 / 255.0);
-  cv::pow(linear, kGamma, linear);
-  linear *= std::pow(grey_fraction, kGamma);
-  constexpr double kFullWellElectrons = 4000.0;
-  constexpr double kReadNoiseElectrons = 4.0;
-  cv::Mat electrons = linear * kFullWellElectrons;
-  cv::Mat noise(electrons.size(), electrons.type());
-  cv::RNG rng(seed);
-  rng.fill(noise, cv::RNG::NORMAL, 0.0, 1.0);
-  cv::Mat shot_sigma;
-  cv::sqrt(cv::max(electrons, 0.0), shot_sigma);
-  electrons += noise.mul(shot_sigma);
-  rng.fill(noise, cv::RNG::NORMAL, 0.0, kReadNoiseElectrons);
-  electrons += noise;
-  cv::Mat out = cv::max(electrons / kFullWellElectrons, 0.0);
-  cv::pow(out, 1.0 / kGamma, out);
-  out.convertTo(out, CV_8U, 255.0);
-  return out;
-}
-
 bool IsEarlierDemoFolder(const std::filesystem::path& dir) {
   return std::filesystem::exists(dir / ".noctua-demo");
 }
@@ -54,7 +28,6 @@ void RunDemo(const DemoFlags& flags) {
                               "outputs of noctua demo; safe to overwrite\n");
   demo::DemoOptions options;
   options.seed = flags.seed;
-  options.darken = Darken;
   demo::RunDemo(options, out_dir, std::cout);
   std::cout << "wrote scenes, overlays, sequences, evaluation reports, summary.md and "
                "summary.json to "

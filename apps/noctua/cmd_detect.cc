@@ -37,6 +37,7 @@ struct DetectArgs {
   std::vector<std::string> dynamic_levels;
   std::string shape = "instance";
   int dilate = 5;
+  bool no_dark_enhance = false;
   bool force = false;
 };
 
@@ -57,6 +58,7 @@ void RunDetect(const DetectArgs& args) {
   options.input_height = input.height;
   options.score_threshold = args.score;
   options.nms_iou = args.iou;
+  options.dark_input.enabled = !args.no_dark_enhance;
   options.Check();
   dynamic::MotionLevelTable table;
   dynamic::DynamicMaskOptions mask_options;
@@ -157,6 +159,11 @@ void AddDetectCommand(CLI::App& app) {
       ->capture_default_str();
   command->add_option("--dilate", args->dilate, "Grow dynamic regions by this many pixels")
       ->capture_default_str();
+  command->add_flag(
+      "--no-dark-enhance", args->no_dark_enhance,
+      "Do not brighten dark frames (mean grey below " +
+          std::to_string(static_cast<int>(dynamic::DarkInputOptions{}.dark_mean_grey)) +
+          ") before detection");
   command->add_flag("-f,--force", args->force, "Write into a non-empty output folder");
   command->callback([args] { RunDetect(*args); });
 }

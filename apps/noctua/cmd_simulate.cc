@@ -35,8 +35,11 @@ struct SimulateFlags {
   std::string seg_model;      // a segmentation model that finds it
   std::uint64_t seed = 1;
   int max_frames = 0;
-  double full_well = sim::SensorModel{}.full_well_electrons;
-  double read_noise = sim::SensorModel{}.read_noise_electrons;
+  std::string sensor = sim::kDefaultSensorModel;
+  double full_well = 0.0;    // 0: the model's
+  double read_noise = -1.0;  // negative: the model's
+  bool no_blur = false;
+  bool list_sensors = false;
   bool force = false;
 };
 
@@ -64,7 +67,40 @@ sim::PersonCutout LoadCutout(const SimulateFlags& flags) {
   return sim::PersonCutout::FromMask(image, mask);
 }
 
+// The named model with the overrides given on the command line.
+sim::SensorModel SensorFromFlags(const SimulateFlags& flags) {
+  sim::SensorModel sensor = sim::SensorModelByName(flags.sensor);
+  if (flags.full_well > 0.0) sensor.full_well_electrons = flags.full_well;
+  if (flags.read_noise >= 0.0) sensor.read_noise_electrons = flags.read_noise;
+  if (flags.full_well > 0.0 || flags.read_noise >= 0.0) sensor.name += "+overrides";
+  return sensor;
+}
+
+nlohmann::json SensorJson(const sim::SensorModel& s) {
+  return {{"name", s.name},
+          {"gamma", s.gamma},
+          {"full_well_electrons", s.full_well_electrons},
+          {"shot_noise", s.shot_noise},
+          {"read_noise_electrons", s.read_noise_electrons},
+          {"dark_current_e_per_s", s.dark_current_e_per_s},
+          {"dsnu_electrons", s.dsnu_electrons},
+          {"prnu", s.prnu},
+          {"row_noise_electrons", s.row_noise_electrons},
+          {"jpeg_quality", s.jpeg_quality},
+          {"exposure_s", s.exposure_s},
+          {"max_exposure_s", s.max_exposure_s}};
+}
+
 void RunSimulate(const SimulateFlags& flags) {
+  if (flags.list_sensors) {
+    std::cout << sim::SensorModelTable();
+    return;
+  }
+  for (const auto& [value, name] :
+       {std::pair{&flags.dataset, "--dataset"}, std::pair{&flags.camera, "--camera"},
+        std::pair{&flags.out, "--out"}}) {
+    if (value->empty()) throw Error(std::string("simulate needs ") + name);
+  }
   if (!(flags.level_percent > 0.0 && flags.level_percent <= 100.0)) {
     throw Error("--level must be a percentage in (0, 100]");
   }
@@ -81,8 +117,8 @@ void RunSimulate(const SimulateFlags& flags) {
     throw Error("--person-mask and --seg-model only apply with --person-cutout");
   }
   options.person_options.distance_m = flags.person_distance_m;
-  options.sensor.full_well_electrons = flags.full_well;
-  options.sensor.read_noise_electrons = flags.read_noise;
+  options.sensor = SensorFromFlags(flags);
+  options.motion_blur = !flags.no_blur;
   options.seed = flags.seed;
   options.max_frames = flags.max_frames;
   options.Check();
@@ -98,10 +134,10 @@ void RunSimulate(const SimulateFlags& flags) {
                          {"level", options.level},
                          {"brightness_factor", report.brightness},
                          {"measured_mean_ratio", report.measured_mean_ratio},
-                         {"sensor",
-                          {{"gamma", options.sensor.gamma},
-                           {"full_well_electrons", options.sensor.full_well_electrons},
-                           {"read_noise_electrons", options.sensor.read_noise_electrons}}},
+                         {"sensor", SensorJson(options.sensor)},
+                         {"exposure_s", report.exposure_s},
+                         {"motion_blur_s", report.blur_s},
+                         {"blurred_frames", report.blurred_frames},
                          {"seed", options.seed},
                          {"person", options.person},
                          {"person_distance_m", options.person_options.distance_m},
@@ -110,7 +146,9 @@ void RunSimulate(const SimulateFlags& flags) {
   io::WriteTextFileAtomically(out / "simulation.json", json.dump(2) + "\n");
   std::cout << "simulated " << report.frames << " frames into " << out.string()
             << " (mean grey ratio " << report.measured_mean_ratio << ", light factor "
-            << report.brightness << (options.person ? ", with the walking person" : "") << ")\n";
+            << report.brightness << ", sensor " << options.sensor.name << ", "
+            << report.blurred_frames << " frames blurred over " << 1000.0 * report.blur_s << " ms"
+            << (options.person ? ", with the walking person" : "") << ")\n";
 }
 
 }  // namespace
@@ -119,13 +157,18 @@ void AddSimulateCommand(CLI::App& app) {
   auto flags = std::make_shared<SimulateFlags>();
   CLI::App* command = app.add_subcommand(
       "simulate", "Low-light and moving-person versions of a TUM/OpenLORIS RGB-D sequence");
-  command->add_option("-d,--dataset", flags->dataset, "Input sequence folder")
-      ->required()
+  command->add_option("-d,--dataset", flags->dataset, "Input sequence folder (required)")
       ->check(CLI::ExistingDirectory);
-  command->add_option("--camera", flags->camera, "Camera preset (e.g. config/tum_fr1.yaml)")
-      ->required()
+  command
+      ->add_option("--camera", flags->camera, "Camera preset, e.g. config/tum_fr1.yaml (required)")
       ->check(CLI::ExistingFile);
-  command->add_option("-o,--out", flags->out, "Output folder (TUM layout)")->required();
+  command->add_option("-o,--out", flags->out, "Output folder, TUM layout (required)");
+  command->add_option("--sensor", flags->sensor, "Sensor model: " + sim::SensorModelNames())
+      ->capture_default_str();
+  command->add_flag("--list-sensors", flags->list_sensors,
+                    "Print the sensor models and their parameters, then exit");
+  command->add_flag("--no-blur", flags->no_blur,
+                    "No motion blur along the ground-truth motion over the longer exposure");
   command
       ->add_option("--level", flags->level_percent,
                    "Mean grey left, in percent of the original (100: no darkening)")
@@ -147,10 +190,9 @@ void AddSimulateCommand(CLI::App& app) {
       ->add_option("--seg-model", flags->seg_model,
                    "Or: a YOLOv8-seg ONNX model that finds the largest person in that image")
       ->check(CLI::ExistingFile);
-  command->add_option("--full-well", flags->full_well, "Sensor full well, electrons")
-      ->capture_default_str();
-  command->add_option("--read-noise", flags->read_noise, "Sensor read noise, electrons rms")
-      ->capture_default_str();
+  command->add_option("--full-well", flags->full_well, "Override the model's full well, electrons");
+  command->add_option("--read-noise", flags->read_noise,
+                      "Override the model's read noise, electrons rms");
   command->add_option("--seed", flags->seed, "Noise seed")->capture_default_str();
   command->add_option("--max-frames", flags->max_frames, "Only the first N frames (0: all)")
       ->capture_default_str();

@@ -10,6 +10,7 @@
 #include "method_options.h"
 #include "noctua/eval/slam_run.h"
 #include "noctua/io/output_dir.h"
+#include "noctua/sim/sensor_model.h"
 #include "noctua/util/error.h"
 
 namespace noctua::app {
@@ -105,7 +106,15 @@ void AddSlamCommand(CLI::App& app) {
   command->add_option("--max-frames", args->run.max_frames, "Stop after this many frames (0: all)");
   command
       ->add_option("--brightness", args->run.brightness,
-                   "Scale the grey values of every frame by this factor (a simple darkening)")
+                   "Darken every frame to this share of its mean grey (1: as recorded) through "
+                   "the --sensor model")
+      ->capture_default_str();
+  command
+      ->add_option("--sensor", args->run.sensor,
+                   "Sensor model of --brightness: " + sim::SensorModelNames() +
+                       " (noiseless: grey values scaled)")
+      ->capture_default_str();
+  command->add_option("--seed", args->run.seed, "Noise seed of --brightness (frame k: seed + k)")
       ->capture_default_str();
   command->add_option("--progress-every", args->progress_every, "Frames per progress line")
       ->capture_default_str();

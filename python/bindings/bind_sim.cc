@@ -1,4 +1,6 @@
 // The low-light sensor model of sim/low_light.h, bound thinly: one Python name per C++ name.
+#include <pybind11/stl.h>
+
 #include "bindings.h"
 #include "convert.h"
 #include "noctua/sim/low_light.h"
@@ -23,7 +25,30 @@ void BindSim(py::module_& m) {
       .def_readwrite("gamma", &sim::SensorModel::gamma)
       .def_readwrite("full_well_electrons", &sim::SensorModel::full_well_electrons)
       .def_readwrite("read_noise_electrons", &sim::SensorModel::read_noise_electrons)
+      .def_readonly("name", &sim::SensorModel::name)
+      .def_readonly("description", &sim::SensorModel::description)
       .def("check", &sim::SensorModel::Check);
+
+  m.def(
+      "sensor_models",
+      [] {
+        std::vector<std::string> names;
+        for (const sim::SensorModel& model : sim::SensorModels()) names.push_back(model.name);
+        return names;
+      },
+      "Names of the family of sensor models (sim/sensor_model.h).");
+  m.def("sensor_model", &sim::SensorModelByName, py::arg("name"), py::return_value_policy::copy,
+        "The named sensor model; noctua.Error for unknown names.");
+  m.def(
+      "darken",
+      [](const py::object& image, double level, const std::string& sensor, std::uint64_t seed) {
+        return ArrayFromMat(sim::DarkenToLevel(ImageArgument(image, "image"), level,
+                                               sim::SensorModelByName(sensor), seed));
+      },
+      py::arg("image"), py::arg("level"), py::arg("sensor") = sim::kDefaultSensorModel,
+      py::arg("seed") = 1,
+      "The image darkened to `level` times its mean grey by the named sensor model (level 0.15 "
+      "is the README's 15%), as noctua's demo, tests and `slam --brightness` do.");
 
   py::class_<sim::LowLightSimulator>(m, "LowLightSimulator",
                                      "One darker exposure: brightness is the factor on the "

@@ -18,6 +18,7 @@ from ._noctua import (  # noqa: F401  (the public API)
     __version__,
     ate,
     brightness_for_mean_ratio,
+    darken,
     coco_class_names,
     edge_methods,
     edges,
@@ -26,6 +27,8 @@ from ._noctua import (  # noqa: F401  (the public API)
     motion_level,
     read_trajectory,
     rpe,
+    sensor_model,
+    sensor_models,
     write_trajectory,
 )
 from . import _noctua

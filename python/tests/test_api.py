@@ -48,6 +48,19 @@ def test_low_light_sensor_model(first_frame):
         noctua.SensorModel(gamma=-1.0)
 
 
+def test_named_sensor_models_darken_to_the_level(first_frame):
+    image = cv2.imread(str(first_frame))
+    names = noctua.sensor_models()
+    assert "kinect" in names and len(names) >= 4
+    for name in names:
+        assert noctua.sensor_model(name).name == name
+        dark = noctua.darken(image, 0.15, sensor=name, seed=2)
+        assert dark.shape == image.shape and dark.dtype == np.uint8
+        assert abs(dark.mean() / image.mean() - 0.15) < 0.03, name
+    with pytest.raises(noctua.Error, match="no-such-sensor"):
+        noctua.sensor_model("no-such-sensor")
+
+
 def test_ate_and_rpe_on_arrays_and_files(tum_sequence, tmp_path):
     truth = noctua.read_trajectory(tum_sequence / "groundtruth.txt")
     assert truth.shape[1] == 8

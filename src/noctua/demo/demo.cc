@@ -12,6 +12,7 @@
 #include "noctua/io/image_file.h"
 #include "noctua/io/output_dir.h"
 #include "noctua/pipeline/method.h"
+#include "noctua/sim/low_light.h"
 #include "noctua/sim/plane_scene.h"
 #include "noctua/sim/sequence.h"
 #include "noctua/util/error.h"
@@ -116,7 +117,7 @@ std::string EvaluateDemoSequence(const cv::Mat& scene, const std::filesystem::pa
 }
 
 void DemoOptions::Check() const {
-  CheckOption(static_cast<bool>(darken), "the demo needs a darkening function");
+  sim::SensorModelByName(sensor);  // throws for an unknown name, listing the known ones
 }
 
 namespace {
@@ -125,7 +126,9 @@ namespace {
 std::string ExtractionTable(const DemoScene& scene, const DemoOptions& options,
                             const std::filesystem::path& out_dir, nlohmann::json& summary) {
   const std::vector<std::pair<std::string, cv::Mat>> lights = {
-      {"normal", scene.image}, {"dark-15pct", options.darken(scene.image, 0.15, options.seed)}};
+      {"normal", scene.image},
+      {"dark-15pct", sim::DarkenToLevel(scene.image, 0.15, sim::SensorModelByName(options.sensor),
+                                        options.seed)}};
   std::string table =
       "| light | method | points | points on the person | detected | final | ms |\n"
       "|---|---|---:|---:|---:|---:|---:|\n";

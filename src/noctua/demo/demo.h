@@ -1,10 +1,11 @@
 #pragma once
 
 #include <filesystem>
-#include <functional>
 #include <iosfwd>
 #include <opencv2/core.hpp>
 #include <string>
+
+#include "noctua/sim/sensor_model.h"
 
 namespace noctua::demo {
 
@@ -16,12 +17,10 @@ struct DemoScene {
 };
 DemoScene MakeDemoScene(unsigned seed);
 
-// How the demo darkens its scene: image, share of the mean grey left (0.15 = "15%"), seed.
-using DarkenFunction = std::function<cv::Mat(const cv::Mat&, double, unsigned)>;
-
 struct DemoOptions {
-  unsigned seed = 7;      // of the generated scene and the darkening's noise
-  DarkenFunction darken;  // required
+  unsigned seed = 7;  // of the generated scene and the darkening's noise
+  // The sensor model (sim/sensor_model.h) that darkens the scene to 15 %.
+  std::string sensor = sim::kDefaultSensorModel;
 
   // Throws noctua::Error naming the first invalid field.
   void Check() const;

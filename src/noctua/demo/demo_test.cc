@@ -24,11 +24,11 @@ TEST(DemoSceneTest, SameSeedSameSceneWithThePersonWhereTheMaskSays) {
   EXPECT_EQ(a.person_mask.at<uchar>(10, 10), 0);
 }
 
-TEST(DemoOptionsTest, ADarkeningFunctionIsRequired) {
+TEST(DemoOptionsTest, TheSensorModelMustBeKnown) {
   DemoOptions options;
-  EXPECT_THROW(options.Check(), Error);
-  options.darken = [](const cv::Mat& image, double, unsigned) { return image; };
   EXPECT_NO_THROW(options.Check());
+  options.sensor = "no-such-sensor";
+  EXPECT_THROW(options.Check(), Error);
 }
 
 }  // namespace

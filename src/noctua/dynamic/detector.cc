@@ -296,11 +296,13 @@ void DetectorOptions::Check() const {
   CheckOption(max_detections >= 1, "detector max_detections must be at least 1");
   CheckOption(mask_threshold > 0.0f && mask_threshold < 1.0f,
               "detector mask_threshold must be in (0, 1)");
+  dark_input.Check();
 }
 
-std::unique_ptr<Detector> LoadDetector(const std::filesystem::path& model_path,
-                                       const DetectorOptions& options) {
-  options.Check();
+namespace {
+
+std::unique_ptr<Detector> LoadNetwork(const std::filesystem::path& model_path,
+                                      const DetectorOptions& options) {
   std::error_code error;
   if (!std::filesystem::exists(model_path, error)) {
     ThrowFileError(model_path, "detector model not found");
@@ -357,6 +359,16 @@ std::unique_ptr<Detector> LoadDetector(const std::filesystem::path& model_path,
       return std::make_unique<YoloXDetector>(std::move(net), std::move(names), *layout, options);
   }
   ThrowFileError(model_path, "unsupported model family");
+}
+
+}  // namespace
+
+std::unique_ptr<Detector> LoadDetector(const std::filesystem::path& model_path,
+                                       const DetectorOptions& options) {
+  options.Check();
+  std::unique_ptr<Detector> detector = LoadNetwork(model_path, options);
+  if (!options.dark_input.enabled) return detector;
+  return MakeDarkAwareDetector(std::move(detector), options.dark_input);
 }
 
 }  // namespace noctua::dynamic

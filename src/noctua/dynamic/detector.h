@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "noctua/dynamic/dark_input.h"
 #include "noctua/dynamic/detection.h"
 
 namespace noctua::dynamic {
@@ -30,6 +31,8 @@ struct DetectorOptions {
   float nms_iou = 0.45f;          // per-class NMS overlap
   int max_detections = 100;
   float mask_threshold = 0.5f;  // instance masks: sigmoid(coefficients . prototypes) > this
+  // Dark frames are brightened before the network sees them (on by default; dark_input.h).
+  DarkInputOptions dark_input;
 
   // Throws noctua::Error naming the first invalid field.
   void Check() const;
@@ -48,8 +51,9 @@ class Detector {
 };
 
 // Loads an ONNX detector and recognises its kind from its outputs (a forward pass at the
-// configured input size). Throws noctua::Error naming the file when it is missing, is not an
-// ONNX model OpenCV can read, cannot be run by OpenCV, or has outputs of no known family.
+// configured input size); with options.dark_input.enabled, wrapped by MakeDarkAwareDetector. Throws
+// noctua::Error naming the file when it is missing, is not an ONNX model OpenCV can read, cannot be
+// run by OpenCV, or has outputs of no known family.
 std::unique_ptr<Detector> LoadDetector(const std::filesystem::path& model_path,
                                        const DetectorOptions& options = {});
 

@@ -15,7 +15,7 @@ using test_support::Fr1Camera;
 using test_support::FreshDir;
 
 // orb, clahe-orb and paper on the first `frames` frames of fr1 darkened to `level` under the
-// sensor model, pairs (i, i + 20) every 4 frames.
+// default sensor model (kinect, with its motion blur), pairs (i, i + 20) every 4 frames.
 struct DarkRun {
   FeatureEvalResult result;
   int correct[3] = {0, 0, 0};  // at tau = 10 px, per method
@@ -49,11 +49,11 @@ DarkRun EvaluateDarkFr1(double level, int frames, const fs::path& report_dir = {
   return run;
 }
 
-// Enhancement must give more correct matches than plain ORB in the dark. Measured
-// (docs/evaluation.md): at 15% (mean grey 23) over the first 80 frames, orb 7.2 correct matches
-// per pair at 10 px, clahe-orb 11.3, paper 11.4; over the whole 200 frames at 15% the three are
-// within noise of each other. At 8% (mean grey ~12) orb keeps ~2 per pair over the whole
-// sequence and clahe-orb and paper 4-5 times as many.
+// Enhancement must give more correct matches than plain ORB in the dark. Measured under the
+// earlier single sensor model (docs/evaluation.md): at 15% (mean grey 23) over the first 80 frames,
+// orb 7.2 correct matches per pair at 10 px, clahe-orb 11.3, paper 11.4; over the whole 200 frames
+// at 15% the three are within noise of each other. At 8% (mean grey ~12) orb keeps ~2 per pair over
+// the whole sequence and clahe-orb and paper 4-5 times as many.
 TEST(EvaluateFeatures, EnhancedMethodsBeatOrbOnFr1DarkenedTo15Percent) {
   const DarkRun run = EvaluateDarkFr1(0.15, 80);
   EXPECT_GT(run.correct[1], run.correct[0]);

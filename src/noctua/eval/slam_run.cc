@@ -6,9 +6,11 @@
 
 #include "noctua/eval/trajectory_plot.h"
 #include "noctua/eval/trajectory_report.h"
+#include "noctua/io/image_file.h"
 #include "noctua/io/output_dir.h"
 #include "noctua/pipeline/method.h"
 #include "noctua/pipeline/method_config.h"
+#include "noctua/sim/low_light.h"
 #include "noctua/util/error.h"
 #include "noctua/util/memory_usage.h"
 #include "noctua/util/timer.h"
@@ -25,6 +27,8 @@ nlohmann::json RunJson(const SlamRunOptions& options, const SlamRunReport& repor
   json["config"] = options.config.string();
   json["method"] = options.method;
   json["brightness"] = options.brightness;
+  json["sensor"] = options.sensor;
+  json["seed"] = options.seed;
   json["reject_moving_points"] = options.reject_moving_points;
   json["frames"] = run.frames.size();
   json["tracked_frames"] = run.trajectory.size();
@@ -102,6 +106,7 @@ void SlamRunOptions::Check() const {
   CheckOption(brightness > 0.0 && brightness <= 1.0, "brightness must be in (0, 1]");
   CheckOption(max_frames >= 0, "max_frames must not be negative");
   CheckOption(detect_every >= 1, "detect_every must be at least 1");
+  sim::SensorModelByName(sensor);  // throws for an unknown name, listing the known ones
   CheckOption(!config.empty(), "the SLAM needs a settings file (a camera preset, see config/)");
 }
 
@@ -154,11 +159,9 @@ SlamRunReport SlamRunner::Run(const SlamProgress& progress, const std::function<
     if (progress) progress(index, count, outcome, report.rss_mb.back());
   };
   if (options_.brightness < 1.0) {
-    run_options.transform_image = [factor = options_.brightness](int, const cv::Mat& image) {
-      cv::Mat dark;
-      image.convertTo(dark, -1, factor);
-      return dark;
-    };
+    run_options.transform_image =
+        sim::SequenceDarkener(io::ReadImage8U(sequence_.frame(0).rgb_path), options_.brightness,
+                              sim::SensorModelByName(options_.sensor), options_.seed);
   }
   run_options.stop = stop;
   report.run = slam::RunSequence(sequence_, setup_.camera.depth_factor, setup_.camera.Camera(),

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
 #include <functional>
 #include <memory>
@@ -22,8 +23,12 @@ struct SlamRunOptions {
   std::string method = "paper";
   std::string detector_model;  // "" = the settings file's model, if any
   int max_frames = 0;          // 0: all
-  double brightness = 1.0;     // grey values of every frame scaled by this, in (0, 1]
-  bool sequential = false;     // extract a frame only after the previous one is tracked
+  // Every frame darkened to this share of its mean grey, in (0, 1], by the `sensor` model
+  // (sim/sensor_model.h; "noiseless": grey values scaled), noise of frame k from seed + k.
+  double brightness = 1.0;
+  std::string sensor = "noiseless";
+  std::uint64_t seed = 1;
+  bool sequential = false;  // extract a frame only after the previous one is tracked
   // The detector: on a thread of its own on every detect_every-th frame, unless detect_inline
   // (in the extraction, every frame).
   int detect_every = dynamic::AsyncMaskOptions().every_n;

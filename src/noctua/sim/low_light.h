@@ -2,33 +2,25 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <opencv2/core.hpp>
+
+#include "noctua/sim/sensor_model.h"
 
 namespace noctua::sim {
 
-// The camera that "takes" the darker picture. A normally lit 8-bit frame is read as the linear
-// irradiance the original exposure collected; the darker exposure collects `brightness` times as
-// many photo-electrons, counted with Poisson shot noise, plus Gaussian read noise, and is written
-// back through the same gamma without any gain (a dark frame stays dark, as real photos do).
+// One darker exposure under a SensorModel: `brightness` is the factor on collected light
+// (0 < brightness <= 1); below 1 the frame is taken at the model's longest exposure.
 //
 //   linear  x = (v / 255) ^ gamma                          v: original 8-bit value
-//   signal  e ~ Poisson(brightness * x * full_well) + Normal(0, read_noise^2)   [electrons]
-//   output  v' = round(255 * clamp(e / full_well, 0, 1) ^ (1 / gamma))
+//   signal  e = Poisson(brightness * x * full_well) * (1 + PRNU(p)) + DSNU(p) + row(y)
+//               + Normal(0, read_noise^2 + dark_current * exposure)     [electrons]
+//   output  v' = round(255 * clamp(e / full_well, 0, 1) ^ (1 / gamma)), then JPEG if the model
+//               has it
 //
-// Defaults: gamma 2.2 (the usual display gamma an 8-bit camera frame is encoded with); a full
-// well of 6000 e- and 3 e- rms read noise, typical of the small-pixel CMOS sensors in RGB-D
-// cameras (the fr1 Kinect has ~3 um pixels). At the "15%" level a mid-grey pixel then collects
-// ~20 e-, an SNR near 4, about as noisy as the real LOL photos in data/lowlight.
-struct SensorModel {
-  double gamma = 2.2;
-  double full_well_electrons = 6000.0;
-  double read_noise_electrons = 3.0;
-
-  // Throws noctua::Error naming the first invalid field.
-  void Check() const;
-};
-
-// One darker exposure: `brightness` is the factor on collected light (0 < brightness <= 1).
+// PRNU and DSNU are fixed patterns (seeded by the model's name and the image size, the same in
+// every frame); row(y) is drawn anew per row and frame. Motion blur is not applied here (see
+// motion_blur.h): it needs the camera's motion.
 class LowLightSimulator {
  public:
   LowLightSimulator(const SensorModel& model, double brightness);
@@ -37,17 +29,23 @@ class LowLightSimulator {
   // is kept). The noise comes from `rng`, so a fixed seed reproduces a sequence.
   cv::Mat Apply(const cv::Mat& image8u, cv::RNG& rng) const;
 
-  // Mean and variance of the 8-bit output for an original value, computed from the model
-  // (Poisson sum over electron counts, read noise integrated over each quantisation bin).
+  // Mean and variance over a flat patch of the 8-bit output for an original value, computed from
+  // the model (Poisson sum over electron counts, the Gaussian terms - read noise, dark-current
+  // shot noise, row noise and the fixed patterns - integrated over each quantisation bin). JPEG
+  // is not part of it: these are the sensor's moments before compression.
   struct Moments {
     double mean = 0.0;
     double variance = 0.0;
   };
   Moments ExpectedOutput(int value8u) const;
 
-  // Expected linear signal in electrons of an 8-bit value, and its variance under the model.
+  // Expected linear signal in electrons of an 8-bit value, and its variance under the model
+  // (every term, over a flat patch).
   double ExpectedElectrons(double value8u) const;
   double ElectronVariance(double value8u) const;
+  // Variance of the Gaussian terms at a signal of `electrons`.
+  double GaussianVariance(double electrons) const;
+  double exposure_s() const { return exposure_s_; }
 
   const SensorModel& model() const { return model_; }
   double brightness() const { return brightness_; }
@@ -55,7 +53,9 @@ class LowLightSimulator {
  private:
   SensorModel model_;
   double brightness_;
+  double exposure_s_;
   void ComputeMoments();
+  cv::Mat FixedPattern(cv::Size size, int channels, double sigma, std::uint64_t salt) const;
 
   std::array<Moments, 256> moments_;
 };
@@ -66,5 +66,23 @@ class LowLightSimulator {
 // black.
 double BrightnessForMeanRatio(const cv::Mat& reference, double mean_ratio,
                               const SensorModel& model);
+
+// The simulator whose output of `reference` has `level` times its mean grey.
+LowLightSimulator SimulatorForLevel(const cv::Mat& reference, double level,
+                                    const SensorModel& model);
+
+// One frame darkened to `level` (mean grey ratio) by `model`, calibrated on the frame itself,
+// noise from `seed`, without motion blur (a still camera). Level 1 returns the frame as it is:
+// "100 %" is the input, whose own noise is real. The one way a single frame is darkened in
+// noctua (demo, tests, benchmarks, `noctua slam --brightness`).
+cv::Mat DarkenToLevel(const cv::Mat& image, double level, const SensorModel& model,
+                      std::uint64_t seed);
+
+// The same for the frames of a sequence, as a transform of (frame index, image): the light
+// factor calibrated once on `reference` (a fixed light, as SimulateSequence does), frame k's noise
+// from seed + k. Empty at level 1 (the frames as they are). Safe to call from several threads.
+using FrameTransform = std::function<cv::Mat(int, const cv::Mat&)>;
+FrameTransform SequenceDarkener(const cv::Mat& reference, double level, const SensorModel& model,
+                                std::uint64_t seed);
 
 }  // namespace noctua::sim

@@ -6,6 +6,7 @@
 
 #include "noctua/io/dataset.h"
 #include "noctua/io/image_file.h"
+#include "noctua/sim/motion_blur.h"
 #include "noctua/util/error.h"
 
 namespace noctua::sim {
@@ -58,10 +59,12 @@ SimulationReport SimulateSequence(const fs::path& input, const io::CameraConfig&
   SimulationReport report;
   report.frames = total;
   std::unique_ptr<LowLightSimulator> darkener;
+  report.exposure_s = options.sensor.ExposureForLevel(options.level);
   if (options.level < 1.0) {
     report.brightness = BrightnessForMeanRatio(io::ReadImage8U(sequence.frame(0).rgb_path),
                                                options.level, options.sensor);
     darkener = std::make_unique<LowLightSimulator>(options.sensor, report.brightness);
+    if (options.motion_blur) report.blur_s = options.sensor.ExtraExposureForLevel(options.level);
   }
   std::unique_ptr<MovingPerson> person;
   if (options.person) {
@@ -95,6 +98,15 @@ SimulationReport SimulateSequence(const fs::path& input, const io::CameraConfig&
       depth = composed.depth;
       mask = composed.mask;
       person_sum += cv::countNonZero(mask) / static_cast<double>(mask.total());
+    }
+    if (report.blur_s > 0.0) {
+      const std::vector<geometry::Pose> poses =
+          ExposurePoses(sequence.ground_truth(), frame.timestamp, report.blur_s);
+      if (!poses.empty()) {
+        image = BlurAlongCameraMotion(image, io::DepthToMetres(depth, camera.depth_factor),
+                                      camera.intrinsics, poses);
+        ++report.blurred_frames;
+      }
     }
     if (darkener) {
       cv::RNG rng(options.seed + static_cast<std::uint64_t>(k));

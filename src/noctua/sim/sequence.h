@@ -18,7 +18,10 @@ struct SimulationOptions {
   MovingPersonOptions person_options;
   // A real person's appearance for the walk (see PersonCutout); none: the drawn silhouette.
   std::optional<PersonCutout> person_cutout;
-  SensorModel sensor;
+  SensorModel sensor = SensorModelByName(kDefaultSensorModel);
+  // Blur each darkened frame along the ground-truth camera motion over the extra exposure the
+  // model takes in the dark (motion_blur.h); frames without a ground-truth pose stay sharp.
+  bool motion_blur = true;
   std::uint64_t seed = 1;  // noise seed (frame k uses seed + k)
   int max_frames = 0;      // 0: every frame of the input
 
@@ -30,6 +33,9 @@ struct SimulationReport {
   double brightness = 1.0;           // light factor found for `level` on the first frame
   double measured_mean_ratio = 1.0;  // mean grey of all output frames / of the input frames
   double person_pixels = 0.0;        // mean share of the frame the person covers
+  double exposure_s = 0.0;           // exposure of the output frames (SensorModel)
+  double blur_s = 0.0;               // extra exposure blurred along the camera motion
+  int blurred_frames = 0;            // frames that had a ground-truth pose to blur along
 };
 
 using SimulationProgress = std::function<void(int done, int total)>;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <opencv2/imgcodecs.hpp>
 
+#include "noctua/sim/low_light.h"
 #include "noctua/util/error.h"
 #include "noctua/util/shared_dir.h"
 
@@ -35,9 +36,7 @@ cv::Mat ReadImageOrThrow(const std::filesystem::path& path, int flags) {
 }
 
 cv::Mat ScaleBrightness(const cv::Mat& image, double factor) {
-  cv::Mat dark;
-  image.convertTo(dark, image.type(), factor);
-  return dark;
+  return sim::DarkenToLevel(image, factor, sim::SensorModelByName("noiseless"), 0);
 }
 
 }  // namespace noctua::testing

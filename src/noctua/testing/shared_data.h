@@ -21,7 +21,10 @@ std::vector<std::filesystem::path> Fr1RgbPaths(int count);
 // Reads an image; throws noctua::Error naming the file when it cannot be read.
 cv::Mat ReadImageOrThrow(const std::filesystem::path& path, int flags);
 
-// Darkens an 8-bit image by scaling its grey values (a simple, noise-free low-light stand-in).
+// Darkens an 8-bit image to `factor` of its mean grey through the project's one darkening,
+// sim::DarkenToLevel, with the "noiseless" sensor model: grey values scaled by `factor` and
+// rounded (for tests that isolate brightness from noise; sim::DarkenToLevel with a camera model
+// for the noisy real thing).
 cv::Mat ScaleBrightness(const cv::Mat& image, double factor);
 
 }  // namespace noctua::testing
