@@ -111,7 +111,7 @@ void SlamRunOptions::Check() const {
 }
 
 const std::vector<std::string>& SlamReportStages() {
-  static const std::vector<std::string> stages = {"load",      "extract", "track",
+  static const std::vector<std::string> stages = {"load",      "extract", "moving", "track",
                                                   "local_map", "mapping", "total"};
   return stages;
 }

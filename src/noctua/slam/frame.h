@@ -95,6 +95,8 @@ struct Frame {
   // Keypoints on something that moves against the static world (moving_points.h): not matched,
   // not mapped.
   std::vector<bool> moving;
+  // Whether `moving` was found over a whole baseline (MotionSegmenter::had_baseline).
+  bool moving_known = false;
   geometry::Pose pose_cw = geometry::Pose::Identity();  // world to camera
 };
 

@@ -216,6 +216,7 @@ std::vector<std::pair<int, int>> MatchWithDepth(const FrameFeatures& a, const Fr
   std::vector<std::vector<cv::DMatch>> forward;
   std::vector<cv::DMatch> backward;
   matcher.knnMatch(a.descriptors(), b.descriptors(), forward, 2);
+  // A cross check: a wrong match looks like a moving point, so only mutual best matches count.
   matcher.match(b.descriptors(), a.descriptors(), backward);
   for (const auto& knn : forward) {
     if (knn.size() < 2) continue;

@@ -43,6 +43,17 @@ void AddBody(Scene& scene, std::mt19937& rng, int count, const Eigen::Vector3d& 
   }
 }
 
+// How many static and how many moving points FindStaticPairs keeps.
+std::pair<int, int> KeptPoints(const Scene& scene) {
+  const std::vector<bool> is_static = FindStaticPairs(scene.pairs, RigidityOptions());
+  int kept_static = 0, kept_moving = 0;
+  for (std::size_t i = 0; i < is_static.size(); ++i) {
+    if (is_static[i] && scene.truly_static[i]) ++kept_static;
+    if (is_static[i] && !scene.truly_static[i]) ++kept_moving;
+  }
+  return {kept_static, kept_moving};
+}
+
 TEST(FindStaticPairs, KeepsTheRoomAndDropsAPersonWhoCoversAThirdOfTheView) {
   std::mt19937 rng(7);
   const Eigen::Isometry3d camera = Motion(8.0, {0.2, 1.0, 0.1}, {0.3, -0.1, 0.2});
@@ -51,12 +62,7 @@ TEST(FindStaticPairs, KeepsTheRoomAndDropsAPersonWhoCoversAThirdOfTheView) {
   // The person walked 15 cm while the camera moved: seen where camera * walk puts them.
   AddBody(scene, rng, 100, {0.2, 0.0, 1.5}, 0.25, camera * Motion(0.0, {0, 1, 0}, {0.15, 0, 0}),
           false);
-  const std::vector<bool> is_static = FindStaticPairs(scene.pairs, RigidityOptions());
-  int kept_static = 0, kept_moving = 0;
-  for (std::size_t i = 0; i < is_static.size(); ++i) {
-    if (is_static[i] && scene.truly_static[i]) ++kept_static;
-    if (is_static[i] && !scene.truly_static[i]) ++kept_moving;
-  }
+  const auto [kept_static, kept_moving] = KeptPoints(scene);
   EXPECT_GE(kept_static, 195);  // 3-sigma agreement: a few static points may fall out
   EXPECT_LE(kept_moving, 5);    // points near the axis of the walk barely move against the room
 }
@@ -74,12 +80,7 @@ TEST(FindStaticPairs, ThreePeopleTogetherLargerThanTheRoomStillLoseToIt) {
           false);
   AddBody(scene, rng, 70, {0.8, 0.0, 1.2}, 0.25, camera * Motion(20, {0, 1, 0}, {0, 0, 0.2}),
           false);
-  const std::vector<bool> is_static = FindStaticPairs(scene.pairs, RigidityOptions());
-  int kept_static = 0, kept_moving = 0;
-  for (std::size_t i = 0; i < is_static.size(); ++i) {
-    if (is_static[i] && scene.truly_static[i]) ++kept_static;
-    if (is_static[i] && !scene.truly_static[i]) ++kept_moving;
-  }
+  const auto [kept_static, kept_moving] = KeptPoints(scene);
   EXPECT_GE(kept_static, 115);
   EXPECT_LE(kept_moving, 10);
 }

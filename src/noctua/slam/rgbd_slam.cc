@@ -18,6 +18,10 @@ RgbdSlam::RgbdSlam(const geometry::PinholeCamera& camera, cv::Ptr<cv::Feature2D>
     : camera_(camera), extractor_(std::move(extractor)), options_(options), tracker_(options) {
   options_.Check();
   if (extractor_.empty()) throw Error("slam: no feature extractor given");
+  if (options_.reject_moving_points) {
+    segmenter_ = std::make_unique<MotionSegmenter>(
+        options_.moving, ScalePyramid(options_.scale_factor, options_.num_levels));
+  }
 }
 
 TrackResult RgbdSlam::Process(const cv::Mat& image, const cv::Mat& depth_m, double timestamp) {
@@ -43,14 +47,23 @@ RgbdSlam::Extracted RgbdSlam::Extract(const cv::Mat& image, const cv::Mat& depth
       std::move(keypoints), descriptors, depth_m, camera_, options_.bf, options_.min_depth_m);
   extracted.timestamp = timestamp;
   extracted.extract_ms = watch.ElapsedMs();
+  if (segmenter_ != nullptr) {
+    watch.Restart();
+    extracted.moving = segmenter_->FlagMoving(extracted.features, timestamp);
+    extracted.moving_known = segmenter_->had_baseline();
+    extracted.moving_ms = watch.ElapsedMs();
+  }
   return extracted;
 }
 
 TrackResult RgbdSlam::Track(Extracted extracted) {
   const int keypoint_count = extracted.features->size();
-  TrackResult result =
-      tracker_.Track(Frame(next_frame_id_++, extracted.timestamp, std::move(extracted.features)));
+  Frame frame(next_frame_id_++, extracted.timestamp, std::move(extracted.features));
+  if (!extracted.moving.empty()) frame.moving = std::move(extracted.moving);
+  frame.moving_known = extracted.moving_known;
+  TrackResult result = tracker_.Track(std::move(frame));
   result.stage_ms["extract"] = extracted.extract_ms;
+  if (segmenter_ != nullptr) result.stage_ms["moving"] = extracted.moving_ms;
   result.keypoints = keypoint_count;
   return result;
 }

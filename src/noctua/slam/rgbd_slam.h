@@ -34,6 +34,11 @@ class RgbdSlam {
     std::shared_ptr<const FrameFeatures> features;
     double timestamp = 0.0;
     double extract_ms = 0.0;
+    // With SlamOptions::reject_moving_points: the keypoints found moving (MotionSegmenter), one
+    // flag per keypoint, whether a whole baseline was seen, and the time it took.
+    std::vector<bool> moving;
+    bool moving_known = false;
+    double moving_ms = 0.0;
   };
   Extracted Extract(const cv::Mat& image, const cv::Mat& depth_m, double timestamp);
   TrackResult Track(Extracted extracted);
@@ -48,6 +53,9 @@ class RgbdSlam {
   cv::Ptr<cv::Feature2D> extractor_;
   SlamOptions options_;
   Tracker tracker_;
+  // Finds moving keypoints on the extraction's side, so that it overlaps tracking; it only looks
+  // back at earlier frames, in frame order, and touches no tracking state.
+  std::unique_ptr<MotionSegmenter> segmenter_;
   long next_frame_id_ = 0;
 };
 

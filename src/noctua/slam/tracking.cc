@@ -18,22 +18,18 @@ Tracker::Tracker(const SlamOptions& options)
       pyramid_(options.scale_factor, options.num_levels),
       mapper_(options_, pyramid_),
       matcher_(0.9, true, pyramid_, options.bf),
-      strict_matcher_(0.7, true, pyramid_, options.bf),
-      segmenter_(options.moving, pyramid_) {
+      strict_matcher_(0.7, true, pyramid_, options.bf) {
   options_.Check();
 }
 
 TrackResult Tracker::Track(Frame frame) {
   TrackResult result;
   current_ = std::make_unique<Frame>(std::move(frame));
-  if (options_.reject_moving_points) {
-    current_->moving = segmenter_.FlagMoving(current_->features, current_->timestamp);
-  }
   Stopwatch watch;
   bool ok = false;
   if (state_ == TrackingState::kNotInitialised) {
     // With moving points rejected, the map starts once they can be told apart.
-    ok = (!options_.reject_moving_points || segmenter_.had_baseline()) && Initialise(*current_);
+    ok = (!options_.reject_moving_points || current_->moving_known) && Initialise(*current_);
     result.state = ok ? TrackingState::kOk : TrackingState::kNotInitialised;
     result.method = ok ? "init" : "";
     result.new_keyframe = ok;

@@ -97,7 +97,6 @@ class Tracker {
   LocalMapper mapper_;
   Matcher matcher_;         // ratio 0.9 (ORB-SLAM's tracking)
   Matcher strict_matcher_;  // ratio 0.7 (reference keyframe, relocalisation)
-  MotionSegmenter segmenter_;
 
   TrackingState state_ = TrackingState::kNotInitialised;
   std::unique_ptr<Frame> current_;
