@@ -150,10 +150,12 @@ void MovingRegion::Check() const {
   CheckOption(half_width_m >= 0.0 && half_height_m >= 0.0 && half_depth_m >= 0.0,
               "slam: moving region sizes must not be negative");
   CheckOption(min_seeds >= 1, "slam: moving region min_seeds must be at least 1");
+  CheckOption(min_moving_share >= 0.0 && min_moving_share <= 1.0,
+              "slam: moving region min_moving_share must be in [0, 1]");
 }
 
 void GrowMovingRegions(const FrameFeatures& features, const MovingRegion& region,
-                       std::vector<bool>& moving) {
+                       const std::vector<bool>& judged, std::vector<bool>& moving) {
   region.Check();
   const std::vector<bool> seeds = moving;
   const double fx = features.camera().fx();
@@ -168,6 +170,7 @@ void GrowMovingRegions(const FrameFeatures& features, const MovingRegion& region
     const Eigen::Vector2d& centre = features.undistorted(r);
     inside.clear();
     int seeds_inside = 0;
+    int judged_inside = 0;
     for (int k : features.InArea(centre.x(), centre.y(), std::max(half_width_px, half_height_px))) {
       const Eigen::Vector2d offset = features.undistorted(k) - centre;
       const double u = offset.x() / half_width_px;
@@ -176,8 +179,11 @@ void GrowMovingRegions(const FrameFeatures& features, const MovingRegion& region
       if (u * u + v * v > 1.0 || other <= 0.0 || std::abs(other - depth) > tolerance) continue;
       inside.push_back(k);
       if (seeds[static_cast<std::size_t>(k)]) ++seeds_inside;
+      if (judged[static_cast<std::size_t>(k)]) ++judged_inside;
     }
-    if (seeds_inside < region.min_seeds) continue;
+    if (seeds_inside < region.min_seeds || seeds_inside < region.min_moving_share * judged_inside) {
+      continue;
+    }
     for (int k : inside) moving[static_cast<std::size_t>(k)] = true;
   }
 }
@@ -259,10 +265,13 @@ std::vector<bool> MotionSegmenter::FlagMoving(std::shared_ptr<const FrameFeature
     std::vector<PointPair> pairs;
     for (const auto& [c, r] : matches) pairs.push_back(Lift(*reference, r, *features, c, scales_));
     const std::vector<bool> is_static = FindStaticPairs(pairs, options_.rigidity);
+    std::vector<bool> judged(moving.size(), false);
     for (std::size_t p = 0; p < matches.size(); ++p) {
-      if (!is_static[p]) moving[static_cast<std::size_t>(matches[p].first)] = true;
+      const auto c = static_cast<std::size_t>(matches[p].first);
+      judged[c] = true;
+      moving[c] = !is_static[p];
     }
-    GrowMovingRegions(*features, options_.region, moving);
+    GrowMovingRegions(*features, options_.region, judged, moving);
   }
   history_.emplace_back(timestamp, std::move(features));
   // Keep what a later frame may use as its reference: everything within the baseline and the

@@ -62,6 +62,10 @@ struct MovingRegion {
   // Moving keypoints a region must hold to grow: a moving body carries many points, while a
   // wrong match, flagged as well, stands alone.
   int min_seeds = 3;
+  // ...and at least this share of the keypoints judged inside it (matched over the baseline) must
+  // be moving. On a person most judged points move; where a fast turn blurs a static scene and
+  // its lagging depth fails a scattered few of many judged points, the region stays.
+  double min_moving_share = 1.0 / 3.0;
 
   void Check() const;
 };
@@ -70,9 +74,10 @@ struct MovingRegion {
 // already flagged: a keypoint inside the ellipse of `region` around a flagged one (its extent
 // projected at the flagged one's depth) and at its depth, within half_depth_m plus three sigmas
 // of depth noise, belongs to the same object, when the region holds region.min_seeds flagged
-// keypoints. Keypoints without depth are left as they are; only the flags set on entry grow.
+// keypoints and they are at least region.min_moving_share of those `judged` there (tested over
+// the baseline). Keypoints without depth are left as they are; only the flags set on entry grow.
 void GrowMovingRegions(const FrameFeatures& features, const MovingRegion& region,
-                       std::vector<bool>& moving);
+                       const std::vector<bool>& judged, std::vector<bool>& moving);
 
 struct MotionSegmenterOptions {
   // How far back the frame lies against which each frame's points are checked. Over a third of a

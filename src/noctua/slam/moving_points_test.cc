@@ -133,8 +133,13 @@ TEST(GrowMovingRegions, ThreeMovingPointsTakeThePersonButNotTheWall) {
   // Three moving points on the chest.
   const int chest = on_person[on_person.size() / 3];
   for (int k : {chest - 1, chest, chest + 1}) moving[static_cast<std::size_t>(k)] = true;
+  // Judged: the three and three static ones elsewhere on the person.
+  std::vector<bool> judged = moving;
+  for (int k : {on_person[0], on_person[1], on_person.back()}) {
+    judged[static_cast<std::size_t>(k)] = true;
+  }
   std::vector<bool> grown = moving;
-  GrowMovingRegions(features, MovingRegion(), grown);
+  GrowMovingRegions(features, MovingRegion(), judged, grown);
   int person_flagged = 0;
   for (int k : on_person) person_flagged += grown[static_cast<std::size_t>(k)] ? 1 : 0;
   // The region reaches 0.3 m either side and 0.9 m up and down: at 1.5 m the whole body but the
@@ -145,8 +150,14 @@ TEST(GrowMovingRegions, ThreeMovingPointsTakeThePersonButNotTheWall) {
   // A single flagged point (a wrong match) grows nothing.
   std::vector<bool> single(moving.size(), false);
   single[static_cast<std::size_t>(chest)] = true;
-  GrowMovingRegions(features, MovingRegion(), single);
+  GrowMovingRegions(features, MovingRegion(), judged, single);
   EXPECT_EQ(std::count(single.begin(), single.end(), true), 1);
+
+  // Three moving among many judged static (a blurred, static scene): nothing grows.
+  std::vector<bool> many(moving.size(), true);
+  std::vector<bool> few = moving;
+  GrowMovingRegions(features, MovingRegion(), many, few);
+  EXPECT_EQ(std::count(few.begin(), few.end(), true), 3);
 }
 
 TEST(LiftedPointSigma, GrowsWithDepthAndPyramidLevel) {
