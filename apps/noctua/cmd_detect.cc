@@ -6,7 +6,6 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/imgproc.hpp>
 #include <set>
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -41,19 +40,9 @@ struct DetectArgs {
   bool force = false;
 };
 
-cv::Size ParseSize(const std::string& text) {
-  int width = 0, height = 0;
-  char x = 0;
-  std::istringstream in(text);
-  if (!(in >> width >> x >> height) || x != 'x' || !in.eof()) {
-    throw Error("--input '" + text + "': expected WIDTHxHEIGHT, e.g. 320x256");
-  }
-  return {width, height};
-}
-
 void RunDetect(const DetectArgs& args) {
   dynamic::DetectorOptions options;
-  const cv::Size input = ParseSize(args.input);
+  const cv::Size input = dynamic::ParseInputSize(args.input, "--input");
   options.input_width = input.width;
   options.input_height = input.height;
   options.score_threshold = args.score;
@@ -104,18 +93,6 @@ void RunDetect(const DetectArgs& args) {
     io::WriteImage(out / (stem + "_detect.png"),
                    dynamic::DrawDetections(image, detections, mask, table, mask_options));
     io::WriteImage(out / (stem + "_mask.png"), mask);
-    nlohmann::json found = nlohmann::json::array();
-    for (const auto& d : detections) {
-      const auto level = table.Level(d.class_id);
-      nlohmann::json entry = {{"class", dynamic::CocoClassName(d.class_id)},
-                              {"class_id", d.class_id},
-                              {"score", d.score},
-                              {"box", {d.box.x, d.box.y, d.box.br().x, d.box.br().y}},
-                              {"motion_level", dynamic::ToString(level)},
-                              {"dynamic", mask_options.dynamic_levels.count(level) > 0}};
-      if (!d.mask.empty()) entry["mask_area"] = cv::countNonZero(d.mask);
-      found.push_back(entry);
-    }
     summary["images"].push_back(
         {{"image", path.string()},
          {"width", image.cols},
@@ -124,7 +101,7 @@ void RunDetect(const DetectArgs& args) {
          {"mask", stem + "_mask.png"},
          {"detect_ms", ms},
          {"dynamic_fraction", cv::countNonZero(mask) / static_cast<double>(mask.total())},
-         {"detections", found}});
+         {"detections", dynamic::DetectionsJson(detections, table, mask_options)}});
     spdlog::info("detect: {}/{} {}: {} objects, {:.1f} ms", i + 1, args.images.size(),
                  path.string(), detections.size(), ms);
   }

@@ -4,12 +4,9 @@
 #include <filesystem>
 #include <iostream>
 #include <memory>
-#include <nlohmann/json.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "commands.h"
-#include "noctua/dynamic/coco.h"
-#include "noctua/dynamic/detector.h"
 #include "noctua/dynamic/dynamic_mask.h"
 #include "noctua/image/enhancement.h"
 #include "noctua/io/camera_config.h"
@@ -57,38 +54,9 @@ sim::PersonCutout LoadCutout(const SimulateFlags& flags) {
     }
     if (cv::countNonZero(mask) == 0) ThrowFileError(flags.person_mask, "person mask is empty");
   } else {
-    const auto detector = dynamic::LoadDetector(flags.seg_model);
-    if (!detector->has_masks()) {
-      ThrowFileError(flags.seg_model, "not a segmentation model (no instance masks)");
-    }
-    mask = dynamic::LargestInstanceMask(detector->Detect(image), dynamic::CocoClassId("person"));
-    if (mask.empty()) ThrowFileError(flags.person_cutout, "no person found to cut out");
+    mask = dynamic::FindLargestPersonMask(image, flags.person_cutout, flags.seg_model);
   }
   return sim::PersonCutout::FromMask(image, mask);
-}
-
-// The named model with the overrides given on the command line.
-sim::SensorModel SensorFromFlags(const SimulateFlags& flags) {
-  sim::SensorModel sensor = sim::SensorModelByName(flags.sensor);
-  if (flags.full_well > 0.0) sensor.full_well_electrons = flags.full_well;
-  if (flags.read_noise >= 0.0) sensor.read_noise_electrons = flags.read_noise;
-  if (flags.full_well > 0.0 || flags.read_noise >= 0.0) sensor.name += "+overrides";
-  return sensor;
-}
-
-nlohmann::json SensorJson(const sim::SensorModel& s) {
-  return {{"name", s.name},
-          {"gamma", s.gamma},
-          {"full_well_electrons", s.full_well_electrons},
-          {"shot_noise", s.shot_noise},
-          {"read_noise_electrons", s.read_noise_electrons},
-          {"dark_current_e_per_s", s.dark_current_e_per_s},
-          {"dsnu_electrons", s.dsnu_electrons},
-          {"prnu", s.prnu},
-          {"row_noise_electrons", s.row_noise_electrons},
-          {"jpeg_quality", s.jpeg_quality},
-          {"exposure_s", s.exposure_s},
-          {"max_exposure_s", s.max_exposure_s}};
 }
 
 void RunSimulate(const SimulateFlags& flags) {
@@ -117,7 +85,7 @@ void RunSimulate(const SimulateFlags& flags) {
     throw Error("--person-mask and --seg-model only apply with --person-cutout");
   }
   options.person_options.distance_m = flags.person_distance_m;
-  options.sensor = SensorFromFlags(flags);
+  options.sensor = sim::SensorModelWithOverrides(flags.sensor, flags.full_well, flags.read_noise);
   options.motion_blur = !flags.no_blur;
   options.seed = flags.seed;
   options.max_frames = flags.max_frames;
@@ -129,26 +97,10 @@ void RunSimulate(const SimulateFlags& flags) {
         if (done % 25 == 0 || done == total) spdlog::info("simulated {}/{} frames", done, total);
       });
   fs::copy_file(flags.camera, out / "camera.yaml", fs::copy_options::overwrite_existing);
-  nlohmann::json json = {{"source", fs::absolute(flags.dataset).lexically_normal().string()},
-                         {"frames", report.frames},
-                         {"level", options.level},
-                         {"brightness_factor", report.brightness},
-                         {"measured_mean_ratio", report.measured_mean_ratio},
-                         {"sensor", SensorJson(options.sensor)},
-                         {"exposure_s", report.exposure_s},
-                         {"motion_blur_s", report.blur_s},
-                         {"blurred_frames", report.blurred_frames},
-                         {"seed", options.seed},
-                         {"person", options.person},
-                         {"person_distance_m", options.person_options.distance_m},
-                         {"person_cutout", flags.person_cutout},
-                         {"person_mean_coverage", report.person_pixels}};
-  io::WriteTextFileAtomically(out / "simulation.json", json.dump(2) + "\n");
-  std::cout << "simulated " << report.frames << " frames into " << out.string()
-            << " (mean grey ratio " << report.measured_mean_ratio << ", light factor "
-            << report.brightness << ", sensor " << options.sensor.name << ", "
-            << report.blurred_frames << " frames blurred over " << 1000.0 * report.blur_s << " ms"
-            << (options.person ? ", with the walking person" : "") << ")\n";
+  io::WriteTextFileAtomically(
+      out / "simulation.json",
+      sim::SimulationRecordJson(flags.dataset, options, report, flags.person_cutout));
+  std::cout << sim::SimulationSummary(options, report, out);
 }
 
 }  // namespace

@@ -3,8 +3,10 @@
 #include <algorithm>
 #include <cstdio>
 #include <opencv2/imgproc.hpp>
+#include <sstream>
 
 #include "noctua/dynamic/coco.h"
+#include "noctua/util/error.h"
 
 namespace noctua::dynamic {
 namespace {
@@ -65,6 +67,34 @@ cv::Mat DrawDetections(const cv::Mat& image, const std::vector<Detection>& detec
                 cv::Scalar(255, 255, 255), thin, cv::LINE_AA);
   }
   return bgr;
+}
+
+nlohmann::json DetectionsJson(const std::vector<Detection>& detections,
+                              const MotionLevelTable& table,
+                              const DynamicMaskOptions& mask_options) {
+  nlohmann::json found = nlohmann::json::array();
+  for (const auto& d : detections) {
+    const auto level = table.Level(d.class_id);
+    nlohmann::json entry = {{"class", CocoClassName(d.class_id)},
+                            {"class_id", d.class_id},
+                            {"score", d.score},
+                            {"box", {d.box.x, d.box.y, d.box.br().x, d.box.br().y}},
+                            {"motion_level", ToString(level)},
+                            {"dynamic", mask_options.dynamic_levels.count(level) > 0}};
+    if (!d.mask.empty()) entry["mask_area"] = cv::countNonZero(d.mask);
+    found.push_back(entry);
+  }
+  return found;
+}
+
+cv::Size ParseInputSize(const std::string& text, const std::string& what) {
+  int width = 0, height = 0;
+  char x = 0;
+  std::istringstream in(text);
+  if (!(in >> width >> x >> height) || x != 'x' || !in.eof()) {
+    throw Error(what + " '" + text + "': expected WIDTHxHEIGHT, e.g. 320x256");
+  }
+  return {width, height};
 }
 
 }  // namespace noctua::dynamic

@@ -4,6 +4,7 @@
 #include <opencv2/imgproc.hpp>
 #include <vector>
 
+#include "noctua/dynamic/coco.h"
 #include "noctua/geometry/camera.h"
 #include "noctua/util/error.h"
 
@@ -150,6 +151,16 @@ cv::Mat LargestInstanceMask(const std::vector<Detection>& detections, int class_
     }
   }
   return largest != nullptr ? largest->mask.clone() : cv::Mat();
+}
+
+cv::Mat FindLargestPersonMask(const cv::Mat& image, const std::string& image_path,
+                              const std::string& model_path) {
+  const auto detector = LoadDetector(model_path);
+  if (!detector->has_masks())
+    ThrowFileError(model_path, "not a segmentation model (no instance masks)");
+  cv::Mat mask = LargestInstanceMask(detector->Detect(image), CocoClassId("person"));
+  if (mask.empty()) ThrowFileError(image_path, "no person found to cut out");
+  return mask;
 }
 
 features::DynamicMaskSource MakeDynamicMaskSource(std::shared_ptr<Detector> detector,

@@ -81,6 +81,12 @@ cv::Mat DepthSegment(const cv::Mat& depth_m, double object_depth_m, double objec
 // a frame; empty when there is none or the detections carry no masks (box-only models).
 cv::Mat LargestInstanceMask(const std::vector<Detection>& detections, int class_id);
 
+// The instance mask of the largest person that the segmentation model `model_path` (YOLOv8n-seg)
+// finds in `image` (read from `image_path`, named in errors). Throws noctua::Error naming the
+// model when it gives no instance masks, and the image when it holds no person.
+cv::Mat FindLargestPersonMask(const cv::Mat& image, const std::string& image_path,
+                              const std::string& model_path);
+
 // Detector + motion levels as the extractor's DynamicMaskSource (synchronous: detection runs in
 // the calling thread). The detector is shared, not copied; calls must not overlap.
 features::DynamicMaskSource MakeDynamicMaskSource(std::shared_ptr<Detector> detector,

@@ -8,6 +8,7 @@
 
 #include "noctua/dynamic/async_masks.h"
 #include "noctua/dynamic/coco.h"
+#include "noctua/dynamic/detection_overlay.h"
 #include "noctua/geometry/camera.h"
 #include "noctua/testing/shared_data.h"
 #include "noctua/util/error.h"
@@ -277,6 +278,37 @@ TEST_F(Fr3Test, NoFeaturePointRemainsOnThePeopleAfterTheMask) {
     const auto left = on_people(kept);
     EXPECT_TRUE(left.empty()) << left.size() << " points left on people, first at " << left[0];
     EXPECT_GT(kept.size(), 300u);  // the rest of the scene keeps its points
+  }
+}
+
+TEST(DetectionsJson, ReportsClassBoxLevelAndWhetherItIsDynamic) {
+  const MotionLevelTable table;
+  const DynamicMaskOptions options;  // high motion level only
+  Detection person = Box(CocoClassId("person"), 10, 20, 30, 40);
+  person.mask = cv::Mat::zeros(100, 100, CV_8UC1);
+  person.mask(cv::Rect(10, 20, 5, 4)).setTo(255);
+  const nlohmann::json json =
+      DetectionsJson({person, Box(CocoClassId("chair"), 0, 0, 5, 5)}, table, options);
+  ASSERT_EQ(json.size(), 2u);
+  EXPECT_EQ(json[0]["class"], "person");
+  EXPECT_EQ(json[0]["box"], nlohmann::json({10, 20, 40, 60}));
+  EXPECT_EQ(json[0]["motion_level"], "high");
+  EXPECT_TRUE(json[0]["dynamic"].get<bool>());
+  EXPECT_EQ(json[0]["mask_area"], 20);
+  EXPECT_FALSE(json[1]["dynamic"].get<bool>());
+  EXPECT_FALSE(json[1].contains("mask_area"));
+}
+
+TEST(ParseInputSize, ReadsWidthByHeightAndNamesTheOptionOtherwise) {
+  EXPECT_EQ(ParseInputSize("320x256", "--input"), cv::Size(320, 256));
+  for (const char* bad : {"320", "320x", "320*256", "320x256x3", "x256"}) {
+    try {
+      ParseInputSize(bad, "--input");
+      ADD_FAILURE() << bad << " was accepted";
+    } catch (const Error& error) {
+      EXPECT_NE(std::string(error.what()).find("--input '" + std::string(bad) + "'"),
+                std::string::npos);
+    }
   }
 }
 

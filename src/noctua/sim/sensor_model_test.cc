@@ -220,5 +220,18 @@ TEST(LowLightSimulator, JpegOptionCompressesTheOutput) {
   EXPECT_LT(roughness(with_jpeg), roughness(without));
 }
 
+TEST(SensorModels, OverridesReplaceOnlyWhatIsGivenAndSaySo) {
+  const SensorModel& kinect = SensorModelByName("kinect");
+  const SensorModel same = SensorModelWithOverrides("kinect", 0.0, -1.0);
+  EXPECT_EQ(same.name, "kinect");
+  EXPECT_EQ(same.full_well_electrons, kinect.full_well_electrons);
+  const SensorModel changed = SensorModelWithOverrides("kinect", 2500.0, 7.0);
+  EXPECT_EQ(changed.name, "kinect+overrides");
+  EXPECT_EQ(changed.full_well_electrons, 2500.0);
+  EXPECT_EQ(changed.read_noise_electrons, 7.0);
+  EXPECT_EQ(changed.gamma, kinect.gamma);
+  EXPECT_THROW(SensorModelWithOverrides("no-such-sensor", 0.0, -1.0), Error);
+}
+
 }  // namespace
 }  // namespace noctua::sim

@@ -2,6 +2,7 @@
 
 #include <fstream>
 #include <iomanip>
+#include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "noctua/io/dataset.h"
@@ -131,6 +132,57 @@ SimulationReport SimulateSequence(const fs::path& input, const io::CameraConfig&
   report.measured_mean_ratio = input_sum > 0.0 ? output_sum / input_sum : 0.0;
   report.person_pixels = total > 0 ? person_sum / total : 0.0;
   return report;
+}
+
+namespace {
+
+nlohmann::json SensorJson(const SensorModel& s) {
+  return {{"name", s.name},
+          {"gamma", s.gamma},
+          {"full_well_electrons", s.full_well_electrons},
+          {"shot_noise", s.shot_noise},
+          {"read_noise_electrons", s.read_noise_electrons},
+          {"dark_current_e_per_s", s.dark_current_e_per_s},
+          {"dsnu_electrons", s.dsnu_electrons},
+          {"prnu", s.prnu},
+          {"row_noise_electrons", s.row_noise_electrons},
+          {"jpeg_quality", s.jpeg_quality},
+          {"exposure_s", s.exposure_s},
+          {"max_exposure_s", s.max_exposure_s}};
+}
+
+}  // namespace
+
+std::string SimulationRecordJson(const std::filesystem::path& source,
+                                 const SimulationOptions& options, const SimulationReport& report,
+                                 const std::string& person_cutout) {
+  const nlohmann::json json = {
+      {"source", std::filesystem::absolute(source).lexically_normal().string()},
+      {"frames", report.frames},
+      {"level", options.level},
+      {"brightness_factor", report.brightness},
+      {"measured_mean_ratio", report.measured_mean_ratio},
+      {"sensor", SensorJson(options.sensor)},
+      {"exposure_s", report.exposure_s},
+      {"motion_blur_s", report.blur_s},
+      {"blurred_frames", report.blurred_frames},
+      {"seed", options.seed},
+      {"person", options.person},
+      {"person_distance_m", options.person_options.distance_m},
+      {"person_cutout", person_cutout},
+      {"person_mean_coverage", report.person_pixels}};
+  return json.dump(2) + "\n";
+}
+
+std::string SimulationSummary(const SimulationOptions& options, const SimulationReport& report,
+                              const std::filesystem::path& output) {
+  std::ostringstream line;
+  line << "simulated " << report.frames << " frames into " << output.string()
+       << " (mean grey ratio " << report.measured_mean_ratio << ", light factor "
+       << report.brightness << ", sensor " << options.sensor.name << ", " << report.blurred_frames
+       << " frames blurred over " << 1000.0 * report.blur_s << " ms"
+       << (options.person ? ", with the walking person" : "") << ")\n";
+  return line.str();
 }
 
 }  // namespace noctua::sim

@@ -50,4 +50,15 @@ SimulationReport SimulateSequence(const std::filesystem::path& input,
                                   const std::filesystem::path& output,
                                   const SimulationProgress& progress = {});
 
+// The record of a simulation (`noctua simulate` writes it as simulation.json): its source, level,
+// the sensor model's parameters, exposure and blur, seed, the person; `person_cutout` is the
+// cut-out image's path ("" for none).
+std::string SimulationRecordJson(const std::filesystem::path& source,
+                                 const SimulationOptions& options, const SimulationReport& report,
+                                 const std::string& person_cutout);
+
+// One line for a person: frames, where, mean grey ratio, light factor, sensor, blur, person.
+std::string SimulationSummary(const SimulationOptions& options, const SimulationReport& report,
+                              const std::filesystem::path& output);
+
 }  // namespace noctua::sim
