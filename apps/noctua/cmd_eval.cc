@@ -21,7 +21,7 @@ namespace fs = std::filesystem;
 struct EvalFlags {
   std::string dataset;
   std::string camera;
-  std::vector<std::string> methods = {"fast", "orb", "clahe-orb", "sift", "paper"};
+  std::vector<std::string> methods = {"fast", "orb", "clahe-orb", "sift", "paper", "noctua"};
   std::string out;
   MethodFlags method;  // only --config and --detector are used
   eval::FeatureEvalOptions options;

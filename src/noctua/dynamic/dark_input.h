@@ -5,6 +5,8 @@
 #include <string>
 #include <vector>
 
+#include "noctua/image/enhancement.h"
+
 namespace noctua::dynamic {
 
 class Detector;
@@ -25,13 +27,10 @@ DarkEnhancement ParseDarkEnhancement(const std::string& name);
 // frame the camera could not expose is brightened to a normal exposure's mean grey first.
 struct DarkInputOptions {
   bool enabled = true;
-  // A frame is dark when its mean grey is below this. Auto-exposure aims a frame's mean near
-  // mid-grey (sRGB 18 % grey is ~118) and normally lit TUM and Bonn frames have means of 90-160;
-  // a quarter of the 8-bit range, about half of what auto-exposure aims for, is a frame the
-  // camera could not expose. Chosen from that reasoning, not fitted to a run.
-  double dark_mean_grey = 64.0;
+  // A frame is dark when its mean grey is below this: an underexposed frame.
+  double dark_mean_grey = image::kUnderexposedMeanGrey;
   // Mean grey the brightened input gets: mid-grey, where well exposed photos sit.
-  double target_mean_grey = 118.0;
+  double target_mean_grey = image::kAutoExposureMeanGrey;
   // Measured (docs/dynamic.md, bench/dark_detection): a gain alone amplifies the pixel noise of
   // small-pixel sensors until the detector misses people it finds without it; smoothing first
   // keeps recall at or above the unenhanced detector's for every sensor model.

@@ -9,6 +9,7 @@
 #include <string>
 
 #include "noctua/features/filters.h"
+#include "noctua/features/noise_adaptive.h"
 #include "noctua/features/ofast.h"
 #include "noctua/features/pyramid.h"
 #include "noctua/features/rbrief.h"
@@ -78,8 +79,20 @@ Extraction Extractor::ExtractWithMask(const cv::Mat& image, const cv::Mat& featu
   CheckSameSizeMask(dynamic_mask_in, gray.size(), "dynamic mask");
   CheckSameSizeMask(edge_map_in, gray.size(), "edge map");
 
+  PyramidFastOptions fast = options_.fast;
+  cv::Mat conditioned = gray;
+  if (options_.noise_adaptive.enabled) {
+    TimeStage(stats, "condition", [&] {
+      FrameConditioning frame = ConditionFrame(gray, options_.fast, options_.noise_adaptive);
+      conditioned = frame.image;
+      fast = frame.fast;
+      stats.conditioning = {frame.gain, frame.noise_sigma, frame.blur_sigma,
+                            fast.initial_fast_threshold, fast.min_fast_threshold};
+    });
+    stats.stages_ran.push_back("condition");
+  }
   cv::Mat enhanced;
-  TimeStage(stats, "enhance", [&] { enhanced = enhancer_.Apply(gray); });
+  TimeStage(stats, "enhance", [&] { enhanced = enhancer_.Apply(conditioned); });
   stats.stages_ran.push_back("enhance:" + image::ToString(options_.enhancement.method));
 
   // The edge map and the dynamic mask are the slow stages and need nothing from the pyramid:
@@ -100,7 +113,6 @@ Extraction Extractor::ExtractWithMask(const cv::Mat& image, const cv::Mat& featu
   if (make_dynamic) dynamic_future = timed_async(dynamic_source_, image);
   if (make_edges) edge_future = timed_async(edge_source_, enhanced);
 
-  const PyramidFastOptions& fast = options_.fast;
   std::optional<ImagePyramid> pyramid;
   TimeStage(stats, "pyramid",
             [&] { pyramid.emplace(enhanced, fast.num_levels, fast.scale_factor); });

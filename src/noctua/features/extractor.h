@@ -4,6 +4,7 @@
 #include <map>
 #include <memory>
 #include <opencv2/features2d.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -24,6 +25,15 @@ using DynamicMaskSource = std::function<cv::Mat(const cv::Mat& image)>;
 
 // What happened to one frame: how many points each stage left, which stages ran, and how long
 // each took (milliseconds).
+// What noise-adaptive extraction (NoiseAdaptiveOptions) chose for the frame.
+struct ConditioningStats {
+  double gain = 1.0;
+  double noise_sigma = 0.0;  // grey levels, after the gain
+  double blur_sigma = 0.0;   // pixels (0: none)
+  int initial_fast_threshold = 0;
+  int min_fast_threshold = 0;
+};
+
 struct ExtractionStats {
   int detected = 0;       // oFAST candidates over all levels, before any filter
   int after_mask = 0;     // after the caller's Feature2D mask (zero pixels exclude)
@@ -38,6 +48,7 @@ struct ExtractionStats {
   std::vector<std::string> stages_skipped;  // "edge-filter (no edge map source)", ...
   std::map<std::string, double> stage_ms;
   double total_ms = 0.0;
+  std::optional<ConditioningStats> conditioning;  // with noise-adaptive extraction only
 };
 
 // One frame's output.

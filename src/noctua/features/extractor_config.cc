@@ -27,10 +27,23 @@ ExtractorOptions ExtractorOptionsFromYaml(const YAML::Node& root, const std::str
       throw Error(source + ":" + std::to_string(section.Mark().line + 1) +
                   ": 'extractor' must be a map of settings");
     }
-    static const std::set<std::string> kKnown = {
-        "enhancement",    "clahe_clip_limit", "clahe_tiles_x",  "clahe_tiles_y", "cell_size",
-        "dynamic_filter", "edge_filter",      "edge_radius_px", "edge_fill",     "nms_filter",
-        "nms_window",     "descriptors",      "parallel"};
+    static const std::set<std::string> kKnown = {"enhancement",
+                                                 "clahe_clip_limit",
+                                                 "clahe_tiles_x",
+                                                 "clahe_tiles_y",
+                                                 "cell_size",
+                                                 "dynamic_filter",
+                                                 "edge_filter",
+                                                 "edge_radius_px",
+                                                 "edge_fill",
+                                                 "nms_filter",
+                                                 "nms_window",
+                                                 "descriptors",
+                                                 "parallel",
+                                                 "noise_target_mean_grey",
+                                                 "noise_max_gain",
+                                                 "noise_threshold_multiple",
+                                                 "noise_max_residual_sigma"};
     for (const auto& entry : section) {
       const auto key = entry.first.as<std::string>();
       if (!kKnown.contains(key)) {
@@ -58,6 +71,12 @@ ExtractorOptions ExtractorOptionsFromYaml(const YAML::Node& root, const std::str
     ReadSetting(section, "nms_window", source, options.nms_filter.window);
     ReadSetting(section, "descriptors", source, options.compute_descriptors);
     ReadSetting(section, "parallel", source, options.parallel);
+    // The noctua method's noise-adaptive stage (on only for that method).
+    auto& adaptive = options.noise_adaptive;
+    ReadSetting(section, "noise_target_mean_grey", source, adaptive.target_mean_grey);
+    ReadSetting(section, "noise_max_gain", source, adaptive.max_gain);
+    ReadSetting(section, "noise_threshold_multiple", source, adaptive.threshold_noise_multiple);
+    ReadSetting(section, "noise_max_residual_sigma", source, adaptive.max_residual_sigma);
   }
   try {
     options.Check();

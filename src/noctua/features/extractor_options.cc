@@ -25,8 +25,22 @@ void NmsFilterOptions::Check() const {
               "nms_filter.window must be odd and in [3, 31]");
 }
 
+void NoiseAdaptiveOptions::Check() const {
+  if (!(target_mean_grey > 0.0 && target_mean_grey < 255.0)) {
+    throw Error("noise_adaptive.target_mean_grey must be in (0, 255)");
+  }
+  if (!(max_gain >= 1.0)) throw Error("noise_adaptive.max_gain must be at least 1");
+  if (!(threshold_noise_multiple >= 0.0)) {
+    throw Error("noise_adaptive.threshold_noise_multiple must not be negative");
+  }
+  if (!(max_residual_sigma >= 0.0)) {
+    throw Error("noise_adaptive.max_residual_sigma must not be negative (0: never smooth)");
+  }
+}
+
 void ExtractorOptions::Check() const {
   enhancement.Check();
+  noise_adaptive.Check();
   fast.Check();
   dynamic_filter.Check();
   edge_filter.Check();

@@ -49,10 +49,36 @@ struct NmsFilterOptions {
   void Check() const;
 };
 
+// Noise-adaptive extraction (the `noctua` method; not in the paper). A frame the camera could not
+// expose is brought by one gain to the edge of normal exposure, its pixel noise is measured,
+// smoothed down to max_residual_sigma when above it, and FAST's thresholds are raised to
+// threshold_noise_multiple x the noise left (features/noise_adaptive.h). A frame exposed
+// normally is left exactly as ORB-SLAM's extractor sees it: its noise is small against its
+// contrast, ORB's thresholds were made for it, and a noise estimate there mostly measures texture.
+struct NoiseAdaptiveOptions {
+  bool enabled = false;
+  // Frames darker than this mean grey are underexposed; the gain brings them up to it. Lifting
+  // them further, to auto-exposure's mid-grey (118), lost frames on the small-pixel JPEG camera
+  // model where this did not (docs/extractor.md).
+  double target_mean_grey = image::kUnderexposedMeanGrey;
+  // The most light the gain makes up for (1/16).
+  double max_gain = 16.0;
+  // A FAST comparison subtracts two noisy pixels (deviation sqrt(2) sigma); 3 deviations of that
+  // difference make a chance pass by noise rare (0.1 %), 9 contiguous ones on the ring rarer still.
+  double threshold_noise_multiple = 3.0 * 1.41421356;
+  // Noise (grey levels, after the gain) above which the frame is smoothed down to it before FAST;
+  // 0: never. 2 keeps FAST's minimum threshold (7) above 3 deviations of a pixel difference
+  // (3 sqrt(2) x 2 = 8.5, the floor then rules): with no smoothing the thresholds that noise
+  // forces leave too few corners and frames were lost; smoothing to 1 blurred the corners away.
+  double max_residual_sigma = 2.0;
+  void Check() const;
+};
+
 // Everything the extractor does, stage by stage. Switching stages off gives the baselines:
 // ORB (no enhancement, no filters), HE-ORB, CLAHE-ORB, and the paper's method (all on).
 struct ExtractorOptions {
   image::EnhancementOptions enhancement;
+  NoiseAdaptiveOptions noise_adaptive;
   PyramidFastOptions fast;
   DynamicFilterOptions dynamic_filter;
   EdgeFilterOptions edge_filter;

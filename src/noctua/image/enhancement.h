@@ -6,6 +6,14 @@
 
 namespace noctua::image {
 
+// Mean grey that auto-exposure aims a frame at (sRGB's 18 % grey): a darker frame is one the camera
+// could not expose, and the gain that brings it here is the inverse of the missing light.
+inline constexpr double kAutoExposureMeanGrey = 118.0;
+// Below this mean grey a frame is underexposed: normally lit TUM and Bonn frames have means of
+// 90-160; a quarter of the 8-bit range, about half of what auto-exposure aims for, is a frame the
+// camera could not expose. Chosen from that reasoning, not fitted to a run.
+inline constexpr double kUnderexposedMeanGrey = 64.0;
+
 enum class EnhancementMethod {
   kNone,
   kHistogramEqualization,  // global histogram equalisation (HE-ORB)

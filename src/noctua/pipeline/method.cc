@@ -220,7 +220,7 @@ class FastBriefDetector : public cv::Feature2D {
 }  // namespace
 
 std::vector<std::string> MethodNames() {
-  return {"fast", "orb-opencv", "orb", "he-orb", "clahe-orb", "paper", "sift", "surf"};
+  return {"fast", "orb-opencv", "orb", "he-orb", "clahe-orb", "paper", "noctua", "sift", "surf"};
 }
 
 ExtractorOptions OptionsForMethod(const std::string& name, const ExtractorOptions& base) {
@@ -229,6 +229,7 @@ ExtractorOptions OptionsForMethod(const std::string& name, const ExtractorOption
   options.edge_filter.enabled = false;
   options.nms_filter.enabled = false;
   options.compute_descriptors = true;
+  options.noise_adaptive.enabled = false;
   if (name == "orb") {
     options.enhancement.method = image::EnhancementMethod::kNone;
   } else if (name == "he-orb") {
@@ -238,6 +239,10 @@ ExtractorOptions OptionsForMethod(const std::string& name, const ExtractorOption
   } else if (name == "paper") {
     options = base;
     options.enhancement.method = image::EnhancementMethod::kClahe;
+    options.noise_adaptive.enabled = false;
+  } else if (name == "noctua") {
+    options.enhancement.method = image::EnhancementMethod::kNone;
+    options.noise_adaptive.enabled = true;
   } else {
     throw Error("'" + name + "' is not a configuration of noctua's extractor");
   }

@@ -73,7 +73,8 @@ class FeatureMethod {
 std::vector<std::string> MethodNames();
 
 // The extractor options a method of ours uses: `base` with the method's stages switched on or off
-// (orb: none; he-orb: HE; clahe-orb: CLAHE; paper: CLAHE and the three filters). Throws
+// (orb: none; he-orb: HE; clahe-orb: CLAHE; paper: CLAHE and the three filters; noctua: the
+// noise-adaptive gain, smoothing and FAST thresholds of features/noise_adaptive.h). Throws
 // noctua::Error for a name that is not one of our extractor's methods.
 features::ExtractorOptions OptionsForMethod(const std::string& name,
                                             const features::ExtractorOptions& base);

@@ -1,0 +1,60 @@
+#include "noctua/image/noise.h"
+
+#include <algorithm>
+#include <array>
+#include <opencv2/imgproc.hpp>
+
+#include "noctua/util/error.h"
+
+namespace noctua::image {
+namespace {
+
+// |N * noise| for white noise of unit deviation has deviation 6 (the mask's L2 norm); the median
+// of the magnitude of a zero-mean Gaussian is 0.6745 of its deviation.
+constexpr double kMaskNorm = 6.0;
+constexpr double kMedianOfMagnitude = 0.6745;
+
+}  // namespace
+
+double EstimateNoiseSigma(const cv::Mat& gray8u) {
+  if (gray8u.empty() || gray8u.type() != CV_8UC1) {
+    throw Error("noise estimate needs a non-empty 8-bit grey image");
+  }
+  if (gray8u.rows < 3 || gray8u.cols < 3) return 0.0;
+  const cv::Mat mask = (cv::Mat_<float>(3, 3) << 1, -2, 1, -2, 4, -2, 1, -2, 1);
+  cv::Mat response;
+  cv::filter2D(gray8u, response, CV_16S, mask, cv::Point(-1, -1), 0, cv::BORDER_REFLECT);
+  // A histogram of |response| (at most 16 * 255) finds the median in one pass.
+  std::array<int, 16 * 255 + 1> histogram{};
+  int count = 0;
+  for (int r = 1; r + 1 < gray8u.rows; ++r) {
+    const auto* grey = gray8u.ptr<std::uint8_t>(r);
+    const auto* value = response.ptr<std::int16_t>(r);
+    for (int c = 1; c + 1 < gray8u.cols; ++c) {
+      if (grey[c] == 0 || grey[c] == 255) continue;
+      ++histogram[static_cast<std::size_t>(std::abs(value[c]))];
+      ++count;
+    }
+  }
+  if (count == 0) return 0.0;
+  int below = 0;
+  std::size_t median = 0;
+  while (2 * (below + histogram[median]) < count) below += histogram[median++];
+  // The median bin holds integer magnitudes: interpolate inside it so that low noise (a median
+  // of 0 or 1) is not rounded away.
+  const double inside = (0.5 * count - below) / std::max(1, histogram[median]);
+  const double magnitude = std::max(0.0, static_cast<double>(median) - 0.5 + inside);
+  return magnitude / (kMaskNorm * kMedianOfMagnitude);
+}
+
+double EstimateNoiseSigmaAcrossScales(const cv::Mat& gray8u) {
+  // The 5-tap binomial [1 4 6 4 1] / 16 keeps sqrt(70) / 16 of white noise per axis.
+  constexpr double kPyrDownWhiteNoiseShare = 70.0 / 256.0;
+  const double pixel_scale = EstimateNoiseSigma(gray8u);
+  if (gray8u.rows < 6 || gray8u.cols < 6) return pixel_scale;
+  cv::Mat half;
+  cv::pyrDown(gray8u, half);
+  return std::max(pixel_scale, EstimateNoiseSigma(half) / kPyrDownWhiteNoiseShare);
+}
+
+}  // namespace noctua::image

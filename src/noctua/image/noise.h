@@ -1,0 +1,22 @@
+#pragma once
+
+#include <opencv2/core.hpp>
+
+namespace noctua::image {
+
+// The standard deviation of a grey image's pixel noise, in grey levels, estimated from the image
+// alone. The image is filtered with Immerkaer's 3x3 mask, the difference of two Laplacians, which
+// cancels every grey ramp and leaves white noise of standard deviation 6 sigma; the median of its
+// magnitude, not the mean, makes the few strong responses of edges and texture count like any
+// other pixel, so a textured frame does not read as a noisy one. Pixels at 0 or 255 are left out
+// (clipped, they carry no noise). Returns 0 for a frame with no usable pixel.
+// Immerkaer, "Fast Noise Variance Estimation", CVIU 64(2), 1996.
+double EstimateNoiseSigma(const cv::Mat& gray8u);
+
+// EstimateNoiseSigma at the pixel scale and at half scale (cv::pyrDown), the latter referred back
+// to the pixel scale as if the noise were white (pyrDown keeps 0.273 of white noise's deviation);
+// the larger of the two. JPEG compression and demosaicing move a sensor's noise to coarser scales
+// where the pixel-scale mask barely sees it, and FAST works on every pyramid level.
+double EstimateNoiseSigmaAcrossScales(const cv::Mat& gray8u);
+
+}  // namespace noctua::image

@@ -1,0 +1,91 @@
+#include "noctua/image/noise.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+
+#include "noctua/image/enhancement.h"
+#include "noctua/testing/shared_data.h"
+#include "noctua/util/error.h"
+
+namespace noctua::image {
+namespace {
+
+// A horizontal grey ramp from 40 to 200 (no noise, no texture).
+cv::Mat Ramp(const cv::Size& size) {
+  cv::Mat ramp(size, CV_32F);
+  for (int r = 0; r < size.height; ++r) {
+    for (int c = 0; c < size.width; ++c) ramp.at<float>(r, c) = 40.0f + 160.0f * c / size.width;
+  }
+  return ramp;
+}
+
+cv::Mat WithNoise(const cv::Mat& clean32f, double sigma, std::uint64_t seed) {
+  cv::Mat noise(clean32f.size(), CV_32F);
+  cv::RNG rng(seed);
+  rng.fill(noise, cv::RNG::NORMAL, 0.0, sigma);
+  cv::Mat out;
+  cv::Mat(clean32f + noise).convertTo(out, CV_8U);
+  return out;
+}
+
+TEST(EstimateNoiseSigma, FindsTheDeviationOfAddedNoise) {
+  const cv::Mat ramp = Ramp(cv::Size(320, 240));
+  for (const double sigma : {2.0, 5.0, 12.0}) {
+    EXPECT_NEAR(EstimateNoiseSigma(WithNoise(ramp, sigma, 7)), sigma, 0.1 * sigma) << sigma;
+  }
+  cv::Mat clean;
+  ramp.convertTo(clean, CV_8U);
+  EXPECT_LT(EstimateNoiseSigma(clean), 0.3);
+}
+
+TEST(EstimateNoiseSigma, TextureDoesNotReadAsNoise) {
+  // 16-pixel squares of contrast 100: every square's border is a strong response of the mask.
+  cv::Mat board(240, 320, CV_32F);
+  for (int r = 0; r < board.rows; ++r) {
+    for (int c = 0; c < board.cols; ++c) {
+      board.at<float>(r, c) = ((r / 16 + c / 16) % 2) ? 170.0f : 70.0f;
+    }
+  }
+  EXPECT_NEAR(EstimateNoiseSigma(WithNoise(board, 3.0, 3)), 3.0, 0.45);
+}
+
+TEST(EstimateNoiseSigma, AddsInQuadratureToARealFramesOwnNoise) {
+  const cv::Mat frame = ToGray8U(noctua::testing::ReadImageOrThrow(
+      noctua::testing::DataDir() / "tum_fr1_rpy_200" / "rgb" / "1305031229.696827.png",
+      cv::IMREAD_COLOR));
+  const double own = EstimateNoiseSigma(frame);
+  EXPECT_GT(own, 0.3);
+  EXPECT_LT(own, 4.0);  // a well exposed Kinect frame
+  cv::Mat frame32f;
+  frame.convertTo(frame32f, CV_32F);
+  const double noisy = EstimateNoiseSigma(WithNoise(frame32f, 8.0, 11));
+  EXPECT_NEAR(noisy, std::hypot(own, 8.0), 0.15 * 8.0);
+}
+
+TEST(EstimateNoiseSigmaAcrossScales, SeesNoiseThatCompressionMovedToCoarserScales) {
+  const cv::Mat ramp = Ramp(cv::Size(320, 240));
+  // White noise: both scales agree.
+  const cv::Mat white = WithNoise(ramp, 5.0, 2);
+  EXPECT_NEAR(EstimateNoiseSigmaAcrossScales(white), EstimateNoiseSigma(white), 1.0);
+  // Noise smoothed over ~2 pixels (as JPEG and demosaicing leave it): the pixel-scale mask sees
+  // little of it, the half scale most.
+  cv::Mat noise(ramp.size(), CV_32F);
+  cv::RNG rng(4);
+  rng.fill(noise, cv::RNG::NORMAL, 0.0, 12.0);
+  cv::GaussianBlur(noise, noise, cv::Size(), 1.5);
+  cv::Mat correlated;
+  cv::Mat(ramp + noise).convertTo(correlated, CV_8U);
+  EXPECT_GT(EstimateNoiseSigmaAcrossScales(correlated), 2.0 * EstimateNoiseSigma(correlated));
+}
+
+TEST(EstimateNoiseSigma, RefusesWhatIsNotGrey8Bit) {
+  EXPECT_THROW(EstimateNoiseSigma(cv::Mat()), Error);
+  EXPECT_THROW(EstimateNoiseSigma(cv::Mat(8, 8, CV_8UC3)), Error);
+  EXPECT_EQ(EstimateNoiseSigma(cv::Mat(2, 2, CV_8UC1, cv::Scalar(9))), 0.0);
+  EXPECT_EQ(EstimateNoiseSigma(cv::Mat(9, 9, CV_8UC1, cv::Scalar(255))), 0.0);
+}
+
+}  // namespace
+}  // namespace noctua::image
