@@ -14,6 +14,7 @@
 #include "noctua/util/error.h"
 #include "noctua/util/memory_usage.h"
 #include "noctua/util/timer.h"
+#include "noctua/viz/viewer.h"
 
 namespace noctua::eval {
 namespace {
@@ -108,6 +109,7 @@ void SlamRunOptions::Check() const {
   CheckOption(detect_every >= 1, "detect_every must be at least 1");
   sim::SensorModelByName(sensor);  // throws for an unknown name, listing the known ones
   CheckOption(!config.empty(), "the SLAM needs a settings file (a camera preset, see config/)");
+  viewer.Check();
 }
 
 const std::vector<std::string>& SlamReportStages() {
@@ -141,7 +143,12 @@ SlamRunner::SlamRunner(const SlamRunOptions& options)
       config_(RunMethodConfig(options)),
       method_(pipeline::CreateMethod(options.method, config_)),
       sequence_(io::Sequence::Open(options.dataset,
-                                   {.ground_truth_convention = setup_.camera.ground_truth})) {}
+                                   {.ground_truth_convention = setup_.camera.ground_truth})) {
+  if (!options_.viewer.any()) return;
+  viewer_ = std::make_unique<viz::Viewer>(options_.viewer, setup_.camera.Camera().size(),
+                                          sequence_.ground_truth());
+  method_->used_masks()->Keep();
+}
 
 SlamRunReport SlamRunner::Run(const SlamProgress& progress, const std::function<bool()>& stop) {
   SlamRunReport report;
@@ -164,9 +171,20 @@ SlamRunReport SlamRunner::Run(const SlamProgress& progress, const std::function<
                               sim::SensorModelByName(options_.sensor), options_.seed);
   }
   run_options.stop = stop;
+  if (viewer_ != nullptr) {
+    run_options.observe = [this](const slam::FrameView& view) {
+      viewer_->Observe(view, method_->used_masks()->Take());
+    };
+    run_options.stop = [this, stop] { return (stop && stop()) || viewer_->stop_requested(); };
+  }
   report.run = slam::RunSequence(sequence_, setup_.camera.depth_factor, setup_.camera.Camera(),
                                  method_->feature2d(), setup_.options, run_options);
   report.sequence_frames = sequence_.size();
+  if (viewer_ != nullptr) {
+    viewer_->Finish();
+    report.stopped_in_viewer = viewer_->stop_requested();
+    report.video_frames = viewer_->video_frames();
+  }
   report.json = RunJson(options_, report, config_, *method_);
   report.markdown =
       TimingMarkdown(SummarizeStages(report.run.frames, SlamReportStages()), report.json) +
@@ -189,20 +207,6 @@ void WriteSlamReport(const SlamRunReport& report, const std::filesystem::path& o
   io::WriteTextFileAtomically(out / "report.md", report.markdown);
   if (report.ate) PlotAte(*report.ate, out, "ate");
   if (report.rpe) PlotRpe(*report.rpe, out, "rpe");
-}
-
-const char* TrackingStateName(slam::TrackingState state) {
-  switch (state) {
-    case slam::TrackingState::kNotInitialised:
-      return "not-initialised";
-    case slam::TrackingState::kOk:
-      return "ok";
-    case slam::TrackingState::kCoasting:
-      return "coasting";
-    case slam::TrackingState::kLost:
-      return "lost";
-  }
-  return "unknown";
 }
 
 std::string FramesCsv(const slam::SequenceRun& run, const std::vector<std::string>& stages,

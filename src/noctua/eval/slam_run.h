@@ -13,6 +13,7 @@
 #include "noctua/eval/trajectory_error.h"
 #include "noctua/pipeline/method.h"
 #include "noctua/slam/rgbd_slam.h"
+#include "noctua/viz/viewer.h"
 
 namespace noctua::eval {
 
@@ -35,6 +36,8 @@ struct SlamRunOptions {
   bool detect_inline = false;
   // Model-free rejection of moving points (slam::SlamOptions::reject_moving_points).
   bool reject_moving_points = false;
+  // A window, a video and the map as a PLY (viz/viewer.h); none by default.
+  viz::ViewerOptions viewer;
 
   // Throws noctua::Error naming the first invalid field.
   void Check() const;
@@ -51,8 +54,10 @@ struct SlamRunReport {
   std::size_t sequence_frames = 0;
   std::optional<AteResult> ate;  // with ground truth and at least 3 poses
   std::optional<RpeResult> rpe;
-  nlohmann::json json;   // report.json
-  std::string markdown;  // report.md
+  bool stopped_in_viewer = false;  // the run ended because the user closed the viewer (q, Esc)
+  int video_frames = 0;            // panels written to SlamRunOptions::viewer.video
+  nlohmann::json json;             // report.json
+  std::string markdown;            // report.md
 };
 
 // The stages of FrameOutcome::stage_ms that reports list, in pipeline order.
@@ -65,8 +70,8 @@ class SlamRunner {
  public:
   explicit SlamRunner(const SlamRunOptions& options);
 
-  // `stop` is checked before every frame (e.g. Ctrl-C): the run then ends there and the report
-  // covers the frames done.
+  // `stop` is checked before every frame (e.g. Ctrl-C), as is the viewer's window: the run then
+  // ends there and the report covers the frames done. The viewer's files are written at the end.
   SlamRunReport Run(const SlamProgress& progress = {}, const std::function<bool()>& stop = {});
 
  private:
@@ -75,6 +80,7 @@ class SlamRunner {
   pipeline::MethodConfig config_;
   std::unique_ptr<pipeline::FeatureMethod> method_;
   io::Sequence sequence_;
+  std::unique_ptr<viz::Viewer> viewer_;  // with SlamRunOptions::viewer.any()
 };
 
 // SlamRunner(options).Run(progress, stop).
@@ -100,6 +106,6 @@ struct StageTiming {
 std::vector<StageTiming> SummarizeStages(const std::vector<slam::FrameOutcome>& frames,
                                          const std::vector<std::string>& stages);
 
-const char* TrackingStateName(slam::TrackingState state);
+using slam::TrackingStateName;
 
 }  // namespace noctua::eval

@@ -167,6 +167,8 @@ class Map {
   std::vector<KeyFrame*> KeyFrames() const;
   int NumKeyFrames() const;
   int NumMapPoints() const;
+  // Good map points.
+  std::vector<const MapPoint*> MapPoints() const;
   const std::vector<std::unique_ptr<KeyFrame>>& all_keyframes() const { return keyframes_; }
   // Every point ever made, culled and freed ones included.
   long NumMapPointsCreated() const { return next_point_id_; }

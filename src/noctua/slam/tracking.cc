@@ -10,6 +10,19 @@
 #include "noctua/util/timer.h"
 
 namespace noctua::slam {
+const char* TrackingStateName(TrackingState state) {
+  switch (state) {
+    case TrackingState::kNotInitialised:
+      return "not-initialised";
+    case TrackingState::kOk:
+      return "ok";
+    case TrackingState::kCoasting:
+      return "coasting";
+    case TrackingState::kLost:
+      return "lost";
+  }
+  return "unknown";
+}
 
 Tracker::Tracker(const SlamOptions& options)
     : options_(options),

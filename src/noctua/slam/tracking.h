@@ -28,6 +28,9 @@ enum class TrackingState {
   kLost,
 };
 
+// "not-initialised", "ok", "coasting" or "lost", as reports write it.
+const char* TrackingStateName(TrackingState state);
+
 // How one frame went.
 struct TrackResult {
   TrackingState state = TrackingState::kNotInitialised;
