@@ -83,6 +83,8 @@ void RunSlam(SlamArguments args) {
   std::cout << report.markdown;
   std::cerr << "slam: wrote trajectory.txt, frames.csv, report.json, report.md"
             << (report.ate ? " and ATE/RPE plots" : "") << " in " << args.out << "\n";
+  if (!args.run.save_map.empty())
+    std::cerr << "slam: saved the map in " << args.run.save_map << "\n";
   if (report.run.interrupted) {
     throw Error("interrupted (Ctrl-C) after " + std::to_string(report.run.frames.size()) + " of " +
                 std::to_string(report.sequence_frames) + " frames; " +
@@ -133,6 +135,17 @@ void AddSlamCommand(CLI::App& app) {
   command->add_flag("--reject-moving-points", args->run.reject_moving_points,
                     "Keep points that move against the static world out of tracking and mapping, "
                     "found from geometry alone (no detector needed; docs/slam.md, Moving points)");
+  CLI::Option* load_map = command->add_option(
+      "--load-map", args->run.load_map,
+      "Start from a map saved by --save-map (same method and camera) instead of a new one");
+  command
+      ->add_flag("--localize", args->run.localize,
+                 "With --load-map: only localise in that map and leave it unchanged (no new "
+                 "keyframes or points, no bundle adjustment)")
+      ->needs(load_map);
+  command->add_option("--save-map", args->run.save_map,
+                      "Write the map into this file at the end of the run (docs/slam.md, Saving "
+                      "and reusing a map)");
   command->callback([args] { RunSlam(*args); });
 }
 

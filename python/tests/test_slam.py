@@ -52,6 +52,19 @@ def test_whole_sequence_run_writes_the_report(tum_sequence, tum_config, tmp_path
     assert result["frames_csv"].startswith("frame,timestamp,state")
 
 
+def test_saved_map_is_reused_for_localisation(tum_sequence, tum_config, tmp_path):
+    saved = noctua.run_slam(tum_sequence, tum_config, method="orb", max_frames=20,
+                            save_map=tmp_path / "fr1.map")
+    assert saved["report"]["map"]["saved"]
+    localised = noctua.run_slam(tum_sequence, tum_config, method="orb", max_frames=20,
+                                load_map=tmp_path / "fr1.map", localize=True)
+    assert localised["report"]["map"]["localised_frames"] == 20
+    assert localised["report"]["keyframes"] == saved["report"]["keyframes"]
+    with pytest.raises(noctua.Error, match="fr1.map"):
+        noctua.run_slam(tum_sequence, tum_config, method="paper", max_frames=20,
+                        load_map=tmp_path / "fr1.map", localize=True)
+
+
 def test_bad_slam_input_is_explained(tum_config, tmp_path):
     with pytest.raises(noctua.Error, match="no_such_settings.yaml"):
         noctua.Slam(tmp_path / "no_such_settings.yaml")
