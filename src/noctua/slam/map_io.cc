@@ -186,7 +186,13 @@ std::string Number(double v) {
   return out.str();
 }
 
-bool Finite(const Eigen::Vector3d& v) { return v.allFinite(); }
+// Metres (or pixels) beyond any camera's reach: a value past it is damage, and would overflow
+// the integer pixel and grid arithmetic of tracking.
+constexpr double kFarthest = 1e6;
+
+bool Bounded(const Eigen::Vector3d& v) {
+  return v.allFinite() && v.cwiseAbs().maxCoeff() < kFarthest;
+}
 
 }  // namespace
 
@@ -389,7 +395,7 @@ void MapFile::ReadKeyFrame(Reader& r, const MapIdentity& identity, Map& map,
   }
   pose.translation() = r.Vector3();
   const Eigen::Matrix3d rotation = pose.linear();
-  if (!std::isfinite(timestamp) || !pose.matrix().allFinite() ||
+  if (!std::isfinite(timestamp) || !pose.matrix().allFinite() || !Bounded(pose.translation()) ||
       !(((rotation.transpose() * rotation) - Eigen::Matrix3d::Identity()).norm() < 1e-6) ||
       !(rotation.determinant() > 0.0)) {
     r.Fail("a keyframe's time or pose is not valid");
@@ -410,12 +416,13 @@ void MapFile::ReadKeyFrame(Reader& r, const MapIdentity& identity, Map& map,
     right_u[i] = r.F64();
     std::memcpy(descriptors.ptr<uchar>(static_cast<int>(i)), r.Raw(32).data(), 32);
     points[i] = r.U32();
-    // Keypoints lie in the image; a pyramid level outside the pyramid would index past it.
-    const bool in_image = k.pt.x >= -0.5 * width && k.pt.x <= 1.5 * width &&
-                          k.pt.y >= -0.5 * height && k.pt.y <= 1.5 * height;
+    // Keypoints lie in the image (undistorting anything far outside it need not converge); a
+    // pyramid level outside the pyramid would index past it.
+    const bool in_image =
+        k.pt.x >= -1.0 && k.pt.x <= width + 1.0 && k.pt.y >= -1.0 && k.pt.y <= height + 1.0;
     if (!in_image || !std::isfinite(k.size) || !std::isfinite(k.angle) ||
         !std::isfinite(k.response) || k.octave < 0 || k.octave >= identity.num_levels ||
-        !std::isfinite(depth[i]) || depth[i] < 0.0 || !std::isfinite(right_u[i])) {
+        !(depth[i] >= 0.0 && depth[i] < kFarthest) || !(std::abs(right_u[i]) < kFarthest)) {
       r.Fail("keypoint " + std::to_string(i) + " is not valid");
     }
   }
@@ -435,9 +442,8 @@ void MapFile::ReadPoint(Reader& r, Map& map, const std::vector<KeyFrame*>& keyfr
   const double min_distance = r.F64();
   const double max_distance = r.F64();
   const std::uint32_t reference = r.U32();
-  if (!Finite(position) || !Finite(normal) || !std::isfinite(min_distance) ||
-      !std::isfinite(max_distance) || min_distance < 0.0 || !(max_distance > 0.0) ||
-      reference >= keyframes.size()) {
+  if (!Bounded(position) || !Bounded(normal) || !(min_distance >= 0.0) ||
+      !(max_distance > 0.0 && max_distance < kFarthest) || reference >= keyframes.size()) {
     r.Fail("a map point is not valid");
   }
   const std::uint32_t count = r.Count(kPairBytes);
