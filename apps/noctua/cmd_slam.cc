@@ -88,6 +88,8 @@ void RunSlam(SlamArguments args) {
     std::cerr << "slam: wrote " << report.video_frames << " panels to " << viewer.video << "\n";
   }
   if (!viewer.map_ply.empty()) std::cerr << "slam: wrote the map to " << viewer.map_ply << "\n";
+  if (!args.run.save_map.empty())
+    std::cerr << "slam: saved the map in " << args.run.save_map << "\n";
   if (report.run.interrupted && !report.stopped_in_viewer) {
     throw Error("interrupted (Ctrl-C) after " + std::to_string(report.run.frames.size()) + " of " +
                 std::to_string(report.sequence_frames) + " frames; " +
@@ -148,6 +150,17 @@ void AddSlamCommand(CLI::App& app) {
                       "Write the same panel as a video, one frame per input frame (.mp4, .avi)");
   command->add_option("--map-ply", viewer.map_ply,
                       "Write the final map's points and keyframe centres as a PLY");
+  CLI::Option* load_map = command->add_option(
+      "--load-map", args->run.load_map,
+      "Start from a map saved by --save-map (same method and camera) instead of a new one");
+  command
+      ->add_flag("--localize", args->run.localize,
+                 "With --load-map: only localise in that map and leave it unchanged (no new "
+                 "keyframes or points, no bundle adjustment)")
+      ->needs(load_map);
+  command->add_option("--save-map", args->run.save_map,
+                      "Write the map into this file at the end of the run (docs/slam.md, Saving "
+                      "and reusing a map)");
   command->callback([args] { RunSlam(*args); });
 }
 

@@ -67,6 +67,17 @@ def test_run_writes_the_viewer_video_and_the_map(tum_sequence, tum_config, tmp_p
     assert f"element vertex {report['map_points'] + report['keyframes']}" in header
     with pytest.raises(noctua.Error, match="unknown extension"):
         noctua.run_slam(tum_sequence, tum_config, method="orb", video=tmp_path / "run.mkv")
+def test_saved_map_is_reused_for_localisation(tum_sequence, tum_config, tmp_path):
+    saved = noctua.run_slam(tum_sequence, tum_config, method="orb", max_frames=20,
+                            save_map=tmp_path / "fr1.map")
+    assert saved["report"]["map"]["saved"]
+    localised = noctua.run_slam(tum_sequence, tum_config, method="orb", max_frames=20,
+                                load_map=tmp_path / "fr1.map", localize=True)
+    assert localised["report"]["map"]["localised_frames"] == 20
+    assert localised["report"]["keyframes"] == saved["report"]["keyframes"]
+    with pytest.raises(noctua.Error, match="fr1.map"):
+        noctua.run_slam(tum_sequence, tum_config, method="paper", max_frames=20,
+                        load_map=tmp_path / "fr1.map", localize=True)
 
 
 def test_bad_slam_input_is_explained(tum_config, tmp_path):

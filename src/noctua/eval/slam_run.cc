@@ -1,5 +1,6 @@
 #include "noctua/eval/slam_run.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -11,6 +12,7 @@
 #include "noctua/pipeline/method.h"
 #include "noctua/pipeline/method_config.h"
 #include "noctua/sim/low_light.h"
+#include "noctua/slam/map_io.h"
 #include "noctua/util/error.h"
 #include "noctua/util/memory_usage.h"
 #include "noctua/util/timer.h"
@@ -86,6 +88,25 @@ std::string CountsMarkdown(const SlamRunReport& report, bool sequential) {
   return counts;
 }
 
+// One line on the map loaded and saved (none without either).
+std::string MapMarkdown(const nlohmann::json& map) {
+  std::string line;
+  if (map["loaded"].get<bool>()) {
+    line += "map loaded from " + map["loaded_from"].get<std::string>() + " (" +
+            std::to_string(map["loaded_keyframes"].get<int>()) + " keyframes, " +
+            std::to_string(map["loaded_map_points"].get<int>()) + " points)";
+    if (map["localize"].get<bool>()) {
+      line += ", localised in it without changing it: " +
+              std::to_string(map["localised_frames"].get<long>()) + " frames localised";
+    }
+  }
+  if (map["saved"].get<bool>()) {
+    line +=
+        (line.empty() ? "map saved to " : "; map saved to ") + map["saved_to"].get<std::string>();
+  }
+  return line.empty() ? line : line + "\n";
+}
+
 // ATE and RPE against the sequence's ground truth, into the report.
 void AddTrajectoryErrors(const io::Trajectory& ground_truth, SlamRunReport& report) {
   if (ground_truth.empty() || report.run.trajectory.size() < 3) return;
@@ -110,6 +131,7 @@ void SlamRunOptions::Check() const {
   sim::SensorModelByName(sensor);  // throws for an unknown name, listing the known ones
   CheckOption(!config.empty(), "the SLAM needs a settings file (a camera preset, see config/)");
   viewer.Check();
+  CheckOption(!localize || !load_map.empty(), "localize needs load_map: a map to localise in");
 }
 
 const std::vector<std::string>& SlamReportStages() {
@@ -144,10 +166,41 @@ SlamRunner::SlamRunner(const SlamRunOptions& options)
       method_(pipeline::CreateMethod(options.method, config_)),
       sequence_(io::Sequence::Open(options.dataset,
                                    {.ground_truth_convention = setup_.camera.ground_truth})) {
+  if (!options_.load_map.empty()) {
+    loaded_map_ = slam::LoadMap(options_.load_map, RunMapIdentity());
+    loaded_keyframes_ = loaded_map_->NumKeyFrames();
+    loaded_map_points_ = loaded_map_->NumMapPoints();
+  }
+  const std::filesystem::path folder = options_.save_map.parent_path();
+  if (!options_.save_map.empty() && !folder.empty() && !std::filesystem::is_directory(folder)) {
+    ThrowFileError(options_.save_map, "cannot save the map there: no such folder");
+  }
   if (!options_.viewer.any()) return;
   viewer_ = std::make_unique<viz::Viewer>(options_.viewer, setup_.camera.Camera().size(),
                                           sequence_.ground_truth());
   method_->used_masks()->Keep();
+}
+
+slam::MapIdentity SlamRunner::RunMapIdentity() const {
+  return slam::MakeMapIdentity(options_.method, setup_.camera.Camera(), setup_.options);
+}
+
+nlohmann::json SlamRunner::MapJson(const slam::SequenceRun& run) const {
+  nlohmann::json json = {{"loaded", !options_.load_map.empty()},
+                         {"localize", options_.localize},
+                         {"saved", !options_.save_map.empty()}};
+  if (!options_.load_map.empty()) {
+    json["loaded_from"] = options_.load_map.string();
+    json["loaded_keyframes"] = loaded_keyframes_;
+    json["loaded_map_points"] = loaded_map_points_;
+  }
+  if (options_.localize) {
+    json["localised_frames"] =
+        std::count_if(run.frames.begin(), run.frames.end(),
+                      [](const auto& f) { return f.state == slam::TrackingState::kOk; });
+  }
+  if (!options_.save_map.empty()) json["saved_to"] = options_.save_map.string();
+  return json;
 }
 
 SlamRunReport SlamRunner::Run(const SlamProgress& progress, const std::function<bool()>& stop) {
@@ -177,8 +230,17 @@ SlamRunReport SlamRunner::Run(const SlamProgress& progress, const std::function<
     };
     run_options.stop = [this, stop] { return (stop && stop()) || viewer_->stop_requested(); };
   }
-  report.run = slam::RunSequence(sequence_, setup_.camera.depth_factor, setup_.camera.Camera(),
-                                 method_->feature2d(), setup_.options, run_options);
+  slam::RgbdSlam slam(setup_.camera.Camera(), method_->feature2d(), setup_.options);
+  if (!options_.load_map.empty()) {
+    if (!loaded_map_) loaded_map_ = slam::LoadMap(options_.load_map, RunMapIdentity());
+    slam.UseMap(std::move(*loaded_map_), options_.localize);
+    loaded_map_.reset();
+  }
+  report.run = slam::RunSequence(slam, sequence_, setup_.camera.depth_factor, run_options);
+  // Saved even after Ctrl-C: the map is whole after every frame.
+  if (!options_.save_map.empty()) {
+    slam::SaveMap(slam.tracker().map(), RunMapIdentity(), options_.save_map);
+  }
   report.sequence_frames = sequence_.size();
   if (viewer_ != nullptr) {
     viewer_->Finish();
@@ -186,9 +248,10 @@ SlamRunReport SlamRunner::Run(const SlamProgress& progress, const std::function<
     report.video_frames = viewer_->video_frames();
   }
   report.json = RunJson(options_, report, config_, *method_);
+  report.json["map"] = MapJson(report.run);
   report.markdown =
       TimingMarkdown(SummarizeStages(report.run.frames, SlamReportStages()), report.json) +
-      CountsMarkdown(report, options_.sequential);
+      CountsMarkdown(report, options_.sequential) + MapMarkdown(report.json["map"]);
   AddTrajectoryErrors(sequence_.ground_truth(), report);
   return report;
 }

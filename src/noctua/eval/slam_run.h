@@ -12,6 +12,7 @@
 #include "noctua/dynamic/async_masks.h"
 #include "noctua/eval/trajectory_error.h"
 #include "noctua/pipeline/method.h"
+#include "noctua/slam/map_io.h"
 #include "noctua/slam/rgbd_slam.h"
 #include "noctua/viz/viewer.h"
 
@@ -38,6 +39,12 @@ struct SlamRunOptions {
   bool reject_moving_points = false;
   // A window, a video and the map as a PLY (viz/viewer.h); none by default.
   viz::ViewerOptions viewer;
+  // Maps that outlive a run (slam/map_io.h): start from the map saved in `load_map` (made with the
+  // same method and camera) instead of a new one; with `localize`, only track against it and
+  // leave it unchanged. `save_map`: write the map there at the end of the run. "": none.
+  std::filesystem::path load_map;
+  bool localize = false;
+  std::filesystem::path save_map;
 
   // Throws noctua::Error naming the first invalid field.
   void Check() const;
@@ -81,6 +88,12 @@ class SlamRunner {
   std::unique_ptr<pipeline::FeatureMethod> method_;
   io::Sequence sequence_;
   std::unique_ptr<viz::Viewer> viewer_;  // with SlamRunOptions::viewer.any()
+  std::optional<slam::Map> loaded_map_;  // read (and checked) before the run starts
+  int loaded_keyframes_ = 0;
+  int loaded_map_points_ = 0;
+
+  slam::MapIdentity RunMapIdentity() const;  // of this run: method, camera, pyramid
+  nlohmann::json MapJson(const slam::SequenceRun& run) const;
 };
 
 // SlamRunner(options).Run(progress, stop).

@@ -172,6 +172,11 @@ SequenceRun RunSequence(const io::Sequence& sequence, double depth_factor,
                         const geometry::PinholeCamera& camera, cv::Ptr<cv::Feature2D> extractor,
                         const SlamOptions& options, const RunOptions& run_options) {
   RgbdSlam slam(camera, std::move(extractor), options);
+  return RunSequence(slam, sequence, depth_factor, run_options);
+}
+
+SequenceRun RunSequence(RgbdSlam& slam, const io::Sequence& sequence, double depth_factor,
+                        const RunOptions& run_options) {
   const int count = run_options.max_frames > 0
                         ? std::min(run_options.max_frames, static_cast<int>(sequence.size()))
                         : static_cast<int>(sequence.size());

@@ -48,6 +48,8 @@ class RgbdSlam {
   // left out rather than guessed), with the latest keyframe poses.
   io::Trajectory Trajectory() const;
   const Tracker& tracker() const { return tracker_; }
+  // Starts from a saved map (Tracker::UseMap); before the first frame.
+  void UseMap(Map map, bool localize) { tracker_.UseMap(std::move(map), localize); }
 
  private:
   geometry::PinholeCamera camera_;
@@ -145,5 +147,9 @@ struct RunOptions {
 SequenceRun RunSequence(const io::Sequence& sequence, double depth_factor,
                         const geometry::PinholeCamera& camera, cv::Ptr<cv::Feature2D> extractor,
                         const SlamOptions& options, const RunOptions& run_options = RunOptions());
+// The same with a SLAM the caller made (e.g. one started from a saved map) and keeps, so that
+// its map can be read or saved after the run.
+SequenceRun RunSequence(RgbdSlam& slam, const io::Sequence& sequence, double depth_factor,
+                        const RunOptions& run_options = RunOptions());
 
 }  // namespace noctua::slam
