@@ -11,6 +11,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   gnuplot-nox
   libfftw3-dev
+  libx11-dev xvfb
   pybind11-dev python3-dev python3-numpy python3-opencv python3-pytest
 )
 missing=()

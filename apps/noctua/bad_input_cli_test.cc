@@ -177,6 +177,31 @@ TEST_F(BadInputCliTest, EmptySequenceAndBadSettingsCreateNoOutputFolder) {
   EXPECT_FALSE(fs::exists(out));
 }
 
+// A map that cannot be used (missing, not a map, made with another method) is refused before
+// anything is written.
+TEST_F(BadInputCliTest, UnusableMapIsRefusedBeforeTheOutputFolderIsMade) {
+  const std::string run =
+      "slam --dataset " + Fr1Subset("seq", 3).string() + " --config " + Config() + " --method ";
+  const fs::path out = dir_ / "never";
+  const auto missing = RunNoctua(run + "orb --out " + out.string() + " --load-map " +
+                                 (dir_ / "none.map").string() + " --localize");
+  EXPECT_EQ(missing.exit_code, 1);
+  EXPECT_THAT(missing.output, AllOf(HasSubstr("none.map"), HasSubstr("no such map file")));
+  std::ofstream(dir_ / "junk.map") << "not a map at all";
+  const auto junk =
+      RunNoctua(run + "orb --out " + out.string() + " --load-map " + (dir_ / "junk.map").string());
+  EXPECT_EQ(junk.exit_code, 1);
+  EXPECT_THAT(junk.output, AllOf(HasSubstr("junk.map"), HasSubstr("not a noctua map")));
+  const auto saved = RunNoctua(run + "orb --out " + (dir_ / "mapped").string() + " --save-map " +
+                               (dir_ / "orb.map").string());
+  ASSERT_EQ(saved.exit_code, 0) << saved.output;
+  const auto other = RunNoctua(run + "paper --out " + out.string() + " --load-map " +
+                               (dir_ / "orb.map").string() + " --localize");
+  EXPECT_EQ(other.exit_code, 1);
+  EXPECT_THAT(other.output, AllOf(HasSubstr("orb.map"), HasSubstr("feature method 'orb'")));
+  EXPECT_FALSE(fs::exists(out));
+}
+
 TEST_F(BadInputCliTest, OneFrameSequenceRunsToTheEnd) {
   const fs::path out = dir_ / "one_out";
   const auto result = RunNoctua("slam --dataset " + Fr1Subset("one", 1).string() + " --config " +

@@ -15,8 +15,9 @@ struct CommandResult {
   std::string output;  // stdout and stderr together
 };
 
-inline CommandResult RunNoctua(const std::string& arguments) {
-  const std::string command = std::string(NOCTUA_BINARY) + " " + arguments + " 2>&1";
+// Runs a shell command line.
+inline CommandResult RunCommand(const std::string& command_line) {
+  const std::string command = command_line + " 2>&1";
   CommandResult result;
   FILE* pipe = popen(command.c_str(), "r");
   if (pipe == nullptr) return result;
@@ -25,6 +26,10 @@ inline CommandResult RunNoctua(const std::string& arguments) {
   const int status = pclose(pipe);
   result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   return result;
+}
+
+inline CommandResult RunNoctua(const std::string& arguments) {
+  return RunCommand(std::string(NOCTUA_BINARY) + " " + arguments);
 }
 
 }  // namespace noctua::app::testing

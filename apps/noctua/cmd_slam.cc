@@ -83,7 +83,14 @@ void RunSlam(SlamArguments args) {
   std::cout << report.markdown;
   std::cerr << "slam: wrote trajectory.txt, frames.csv, report.json, report.md"
             << (report.ate ? " and ATE/RPE plots" : "") << " in " << args.out << "\n";
-  if (report.run.interrupted) {
+  const viz::ViewerOptions& viewer = args.run.viewer;
+  if (!viewer.video.empty()) {
+    std::cerr << "slam: wrote " << report.video_frames << " panels to " << viewer.video << "\n";
+  }
+  if (!viewer.map_ply.empty()) std::cerr << "slam: wrote the map to " << viewer.map_ply << "\n";
+  if (!args.run.save_map.empty())
+    std::cerr << "slam: saved the map in " << args.run.save_map << "\n";
+  if (report.run.interrupted && !report.stopped_in_viewer) {
     throw Error("interrupted (Ctrl-C) after " + std::to_string(report.run.frames.size()) + " of " +
                 std::to_string(report.sequence_frames) + " frames; " +
                 (out / "trajectory.txt").string() + " holds the " +
@@ -133,6 +140,27 @@ void AddSlamCommand(CLI::App& app) {
   command->add_flag("--reject-moving-points", args->run.reject_moving_points,
                     "Keep points that move against the static world out of tracking and mapping, "
                     "found from geometry alone (no detector needed; docs/slam.md, Moving points)");
+  viz::ViewerOptions& viewer = args->run.viewer;
+  command->add_flag("--view", viewer.window,
+                    "Show the frame, its keypoints, dynamic regions, trajectory and map in a "
+                    "window (space: pause, q/Esc: stop)");
+  command->add_option("--view-screenshot", viewer.screenshot,
+                      "With --view: save the screen as shown after the last frame (PNG)");
+  command->add_option("--video", viewer.video,
+                      "Write the same panel as a video, one frame per input frame (.mp4, .avi)");
+  command->add_option("--map-ply", viewer.map_ply,
+                      "Write the final map's points and keyframe centres as a PLY");
+  CLI::Option* load_map = command->add_option(
+      "--load-map", args->run.load_map,
+      "Start from a map saved by --save-map (same method and camera) instead of a new one");
+  command
+      ->add_flag("--localize", args->run.localize,
+                 "With --load-map: only localise in that map and leave it unchanged (no new "
+                 "keyframes or points, no bundle adjustment)")
+      ->needs(load_map);
+  command->add_option("--save-map", args->run.save_map,
+                      "Write the map into this file at the end of the run (docs/slam.md, Saving "
+                      "and reusing a map)");
   command->callback([args] { RunSlam(*args); });
 }
 

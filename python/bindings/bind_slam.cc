@@ -75,7 +75,9 @@ class Slam {
 
 py::dict RunSlamOnSequence(const std::string& dataset, const std::string& config,
                            const std::string& method, const py::object& detector, int max_frames,
-                           const py::object& out, double brightness, bool sequential, bool force) {
+                           const py::object& out, double brightness, bool sequential, bool force,
+                           const py::object& video, const py::object& map_ply,
+                           const py::object& load_map, bool localize, const py::object& save_map) {
   eval::SlamRunOptions options;
   options.dataset = dataset;
   options.config = config;
@@ -84,6 +86,11 @@ py::dict RunSlamOnSequence(const std::string& dataset, const std::string& config
   options.max_frames = max_frames;
   options.brightness = brightness;
   options.sequential = sequential;
+  options.viewer.video = PathArgument(video);
+  options.viewer.map_ply = PathArgument(map_ply);
+  options.load_map = PathArgument(load_map);
+  options.localize = localize;
+  options.save_map = PathArgument(save_map);
   eval::SlamRunner runner(options);  // bad input fails before the output folder is made
   const std::filesystem::path out_dir = PathArgument(out);
   if (!out_dir.empty()) io::PrepareOutputDir(out_dir, force);
@@ -98,6 +105,7 @@ py::dict RunSlamOnSequence(const std::string& dataset, const std::string& config
   result["report"] = py::module_::import("json").attr("loads")(report.json.dump());
   result["markdown"] = report.markdown;
   result["frames_csv"] = eval::FramesCsv(report.run, eval::SlamReportStages(), report.rss_mb);
+  result["video_frames"] = report.video_frames;
   return result;
 }
 
@@ -128,7 +136,8 @@ Slam(config, method="paper", detector=None)
       .def_property_readonly("depth_factor", &Slam::depth_factor);
   m.def("run_slam", &RunSlamOnSequence, py::arg("sequence_dir"), py::arg("config"),
         py::arg("method"), py::arg("detector"), py::arg("max_frames"), py::arg("out"),
-        py::arg("brightness"), py::arg("sequential"), py::arg("force"),
+        py::arg("brightness"), py::arg("sequential"), py::arg("force"), py::arg("video"),
+        py::arg("map_ply"), py::arg("load_map"), py::arg("localize"), py::arg("save_map"),
         "See noctua.run_slam (the Python wrapper documents the arguments).");
 }
 

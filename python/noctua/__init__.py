@@ -70,15 +70,26 @@ def config_path(name):
 
 
 def run_slam(sequence_dir, config, method="paper", detector=None, max_frames=0, out=None,
-             brightness=1.0, sequential=False, force=False):
+             brightness=1.0, sequential=False, force=False, video=None, map_ply=None,
+             load_map=None, localize=False, save_map=None):
     """Runs the SLAM over a TUM / OpenLORIS sequence folder, as ``noctua slam`` does.
 
     Returns a dict: ``trajectory`` ((N, 8) TUM rows), ``report`` (report.json's content:
     frames, lost frames, timing, ATE/RPE with ground truth) and ``frames_csv`` (frames.csv's
     text). With ``out``, writes the same files as the command (trajectory.txt, frames.csv,
-    report.json, report.md, ATE/RPE plots) into that folder.
+    report.json, report.md, ATE/RPE plots) into that folder. With ``video`` (.mp4 or .avi), writes
+    the viewer's panel of every frame as a video (``video_frames`` in the result counts them);
+    with ``map_ply``, the final map as a PLY (docs/viewer.md).
+
+    ``load_map`` starts from a map saved with ``save_map`` (same method and camera) instead of
+    a new one; with ``localize`` the run only localises in it and leaves it unchanged.
+    ``save_map`` writes the map at the end of the run (``report["map"]`` says what was done).
     """
     return _noctua.run_slam(
         _os.fspath(sequence_dir), _os.fspath(config), method,
         None if detector is None else _os.fspath(detector), max_frames,
-        None if out is None else _os.fspath(out), brightness, sequential, force)
+        None if out is None else _os.fspath(out), brightness, sequential, force,
+        None if video is None else _os.fspath(video),
+        None if map_ply is None else _os.fspath(map_ply),
+        None if load_map is None else _os.fspath(load_map), localize,
+        None if save_map is None else _os.fspath(save_map))

@@ -52,6 +52,34 @@ def test_whole_sequence_run_writes_the_report(tum_sequence, tum_config, tmp_path
     assert result["frames_csv"].startswith("frame,timestamp,state")
 
 
+def test_run_writes_the_viewer_video_and_the_map(tum_sequence, tum_config, tmp_path):
+    video, ply = tmp_path / "run.avi", tmp_path / "map.ply"
+    result = noctua.run_slam(tum_sequence, tum_config, method="orb", max_frames=12, video=video,
+                             map_ply=ply)
+    assert result["video_frames"] == 12
+    capture = cv2.VideoCapture(str(video))
+    count = 0
+    while capture.read()[0]:
+        count += 1
+    assert count == 12
+    header = ply.read_text().split("end_header")[0]
+    report = result["report"]
+    assert f"element vertex {report['map_points'] + report['keyframes']}" in header
+    with pytest.raises(noctua.Error, match="unknown extension"):
+        noctua.run_slam(tum_sequence, tum_config, method="orb", video=tmp_path / "run.mkv")
+def test_saved_map_is_reused_for_localisation(tum_sequence, tum_config, tmp_path):
+    saved = noctua.run_slam(tum_sequence, tum_config, method="orb", max_frames=20,
+                            save_map=tmp_path / "fr1.map")
+    assert saved["report"]["map"]["saved"]
+    localised = noctua.run_slam(tum_sequence, tum_config, method="orb", max_frames=20,
+                                load_map=tmp_path / "fr1.map", localize=True)
+    assert localised["report"]["map"]["localised_frames"] == 20
+    assert localised["report"]["keyframes"] == saved["report"]["keyframes"]
+    with pytest.raises(noctua.Error, match="fr1.map"):
+        noctua.run_slam(tum_sequence, tum_config, method="paper", max_frames=20,
+                        load_map=tmp_path / "fr1.map", localize=True)
+
+
 def test_bad_slam_input_is_explained(tum_config, tmp_path):
     with pytest.raises(noctua.Error, match="no_such_settings.yaml"):
         noctua.Slam(tmp_path / "no_such_settings.yaml")

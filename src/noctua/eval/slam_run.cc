@@ -1,5 +1,6 @@
 #include "noctua/eval/slam_run.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -11,9 +12,11 @@
 #include "noctua/pipeline/method.h"
 #include "noctua/pipeline/method_config.h"
 #include "noctua/sim/low_light.h"
+#include "noctua/slam/map_io.h"
 #include "noctua/util/error.h"
 #include "noctua/util/memory_usage.h"
 #include "noctua/util/timer.h"
+#include "noctua/viz/viewer.h"
 
 namespace noctua::eval {
 namespace {
@@ -85,6 +88,25 @@ std::string CountsMarkdown(const SlamRunReport& report, bool sequential) {
   return counts;
 }
 
+// One line on the map loaded and saved (none without either).
+std::string MapMarkdown(const nlohmann::json& map) {
+  std::string line;
+  if (map["loaded"].get<bool>()) {
+    line += "map loaded from " + map["loaded_from"].get<std::string>() + " (" +
+            std::to_string(map["loaded_keyframes"].get<int>()) + " keyframes, " +
+            std::to_string(map["loaded_map_points"].get<int>()) + " points)";
+    if (map["localize"].get<bool>()) {
+      line += ", localised in it without changing it: " +
+              std::to_string(map["localised_frames"].get<long>()) + " frames localised";
+    }
+  }
+  if (map["saved"].get<bool>()) {
+    line +=
+        (line.empty() ? "map saved to " : "; map saved to ") + map["saved_to"].get<std::string>();
+  }
+  return line.empty() ? line : line + "\n";
+}
+
 // ATE and RPE against the sequence's ground truth, into the report.
 void AddTrajectoryErrors(const io::Trajectory& ground_truth, SlamRunReport& report) {
   if (ground_truth.empty() || report.run.trajectory.size() < 3) return;
@@ -108,6 +130,8 @@ void SlamRunOptions::Check() const {
   CheckOption(detect_every >= 1, "detect_every must be at least 1");
   sim::SensorModelByName(sensor);  // throws for an unknown name, listing the known ones
   CheckOption(!config.empty(), "the SLAM needs a settings file (a camera preset, see config/)");
+  viewer.Check();
+  CheckOption(!localize || !load_map.empty(), "localize needs load_map: a map to localise in");
 }
 
 const std::vector<std::string>& SlamReportStages() {
@@ -141,7 +165,43 @@ SlamRunner::SlamRunner(const SlamRunOptions& options)
       config_(RunMethodConfig(options)),
       method_(pipeline::CreateMethod(options.method, config_)),
       sequence_(io::Sequence::Open(options.dataset,
-                                   {.ground_truth_convention = setup_.camera.ground_truth})) {}
+                                   {.ground_truth_convention = setup_.camera.ground_truth})) {
+  if (!options_.load_map.empty()) {
+    loaded_map_ = slam::LoadMap(options_.load_map, RunMapIdentity());
+    loaded_keyframes_ = loaded_map_->NumKeyFrames();
+    loaded_map_points_ = loaded_map_->NumMapPoints();
+  }
+  const std::filesystem::path folder = options_.save_map.parent_path();
+  if (!options_.save_map.empty() && !folder.empty() && !std::filesystem::is_directory(folder)) {
+    ThrowFileError(options_.save_map, "cannot save the map there: no such folder");
+  }
+  if (!options_.viewer.any()) return;
+  viewer_ = std::make_unique<viz::Viewer>(options_.viewer, setup_.camera.Camera().size(),
+                                          sequence_.ground_truth());
+  method_->used_masks()->Keep();
+}
+
+slam::MapIdentity SlamRunner::RunMapIdentity() const {
+  return slam::MakeMapIdentity(options_.method, setup_.camera.Camera(), setup_.options);
+}
+
+nlohmann::json SlamRunner::MapJson(const slam::SequenceRun& run) const {
+  nlohmann::json json = {{"loaded", !options_.load_map.empty()},
+                         {"localize", options_.localize},
+                         {"saved", !options_.save_map.empty()}};
+  if (!options_.load_map.empty()) {
+    json["loaded_from"] = options_.load_map.string();
+    json["loaded_keyframes"] = loaded_keyframes_;
+    json["loaded_map_points"] = loaded_map_points_;
+  }
+  if (options_.localize) {
+    json["localised_frames"] =
+        std::count_if(run.frames.begin(), run.frames.end(),
+                      [](const auto& f) { return f.state == slam::TrackingState::kOk; });
+  }
+  if (!options_.save_map.empty()) json["saved_to"] = options_.save_map.string();
+  return json;
+}
 
 SlamRunReport SlamRunner::Run(const SlamProgress& progress, const std::function<bool()>& stop) {
   SlamRunReport report;
@@ -164,13 +224,34 @@ SlamRunReport SlamRunner::Run(const SlamProgress& progress, const std::function<
                               sim::SensorModelByName(options_.sensor), options_.seed);
   }
   run_options.stop = stop;
-  report.run = slam::RunSequence(sequence_, setup_.camera.depth_factor, setup_.camera.Camera(),
-                                 method_->feature2d(), setup_.options, run_options);
+  if (viewer_ != nullptr) {
+    run_options.observe = [this](const slam::FrameView& view) {
+      viewer_->Observe(view, method_->used_masks()->Take());
+    };
+    run_options.stop = [this, stop] { return (stop && stop()) || viewer_->stop_requested(); };
+  }
+  slam::RgbdSlam slam(setup_.camera.Camera(), method_->feature2d(), setup_.options);
+  if (!options_.load_map.empty()) {
+    if (!loaded_map_) loaded_map_ = slam::LoadMap(options_.load_map, RunMapIdentity());
+    slam.UseMap(std::move(*loaded_map_), options_.localize);
+    loaded_map_.reset();
+  }
+  report.run = slam::RunSequence(slam, sequence_, setup_.camera.depth_factor, run_options);
+  // Saved even after Ctrl-C: the map is whole after every frame.
+  if (!options_.save_map.empty()) {
+    slam::SaveMap(slam.tracker().map(), RunMapIdentity(), options_.save_map);
+  }
   report.sequence_frames = sequence_.size();
+  if (viewer_ != nullptr) {
+    viewer_->Finish();
+    report.stopped_in_viewer = viewer_->stop_requested();
+    report.video_frames = viewer_->video_frames();
+  }
   report.json = RunJson(options_, report, config_, *method_);
+  report.json["map"] = MapJson(report.run);
   report.markdown =
       TimingMarkdown(SummarizeStages(report.run.frames, SlamReportStages()), report.json) +
-      CountsMarkdown(report, options_.sequential);
+      CountsMarkdown(report, options_.sequential) + MapMarkdown(report.json["map"]);
   AddTrajectoryErrors(sequence_.ground_truth(), report);
   return report;
 }
@@ -189,20 +270,6 @@ void WriteSlamReport(const SlamRunReport& report, const std::filesystem::path& o
   io::WriteTextFileAtomically(out / "report.md", report.markdown);
   if (report.ate) PlotAte(*report.ate, out, "ate");
   if (report.rpe) PlotRpe(*report.rpe, out, "rpe");
-}
-
-const char* TrackingStateName(slam::TrackingState state) {
-  switch (state) {
-    case slam::TrackingState::kNotInitialised:
-      return "not-initialised";
-    case slam::TrackingState::kOk:
-      return "ok";
-    case slam::TrackingState::kCoasting:
-      return "coasting";
-    case slam::TrackingState::kLost:
-      return "lost";
-  }
-  return "unknown";
 }
 
 std::string FramesCsv(const slam::SequenceRun& run, const std::vector<std::string>& stages,

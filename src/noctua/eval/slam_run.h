@@ -12,7 +12,9 @@
 #include "noctua/dynamic/async_masks.h"
 #include "noctua/eval/trajectory_error.h"
 #include "noctua/pipeline/method.h"
+#include "noctua/slam/map_io.h"
 #include "noctua/slam/rgbd_slam.h"
+#include "noctua/viz/viewer.h"
 
 namespace noctua::eval {
 
@@ -35,6 +37,14 @@ struct SlamRunOptions {
   bool detect_inline = false;
   // Model-free rejection of moving points (slam::SlamOptions::reject_moving_points).
   bool reject_moving_points = false;
+  // A window, a video and the map as a PLY (viz/viewer.h); none by default.
+  viz::ViewerOptions viewer;
+  // Maps that outlive a run (slam/map_io.h): start from the map saved in `load_map` (made with the
+  // same method and camera) instead of a new one; with `localize`, only track against it and
+  // leave it unchanged. `save_map`: write the map there at the end of the run. "": none.
+  std::filesystem::path load_map;
+  bool localize = false;
+  std::filesystem::path save_map;
 
   // Throws noctua::Error naming the first invalid field.
   void Check() const;
@@ -51,8 +61,10 @@ struct SlamRunReport {
   std::size_t sequence_frames = 0;
   std::optional<AteResult> ate;  // with ground truth and at least 3 poses
   std::optional<RpeResult> rpe;
-  nlohmann::json json;   // report.json
-  std::string markdown;  // report.md
+  bool stopped_in_viewer = false;  // the run ended because the user closed the viewer (q, Esc)
+  int video_frames = 0;            // panels written to SlamRunOptions::viewer.video
+  nlohmann::json json;             // report.json
+  std::string markdown;            // report.md
 };
 
 // The stages of FrameOutcome::stage_ms that reports list, in pipeline order.
@@ -65,8 +77,8 @@ class SlamRunner {
  public:
   explicit SlamRunner(const SlamRunOptions& options);
 
-  // `stop` is checked before every frame (e.g. Ctrl-C): the run then ends there and the report
-  // covers the frames done.
+  // `stop` is checked before every frame (e.g. Ctrl-C), as is the viewer's window: the run then
+  // ends there and the report covers the frames done. The viewer's files are written at the end.
   SlamRunReport Run(const SlamProgress& progress = {}, const std::function<bool()>& stop = {});
 
  private:
@@ -75,6 +87,13 @@ class SlamRunner {
   pipeline::MethodConfig config_;
   std::unique_ptr<pipeline::FeatureMethod> method_;
   io::Sequence sequence_;
+  std::unique_ptr<viz::Viewer> viewer_;  // with SlamRunOptions::viewer.any()
+  std::optional<slam::Map> loaded_map_;  // read (and checked) before the run starts
+  int loaded_keyframes_ = 0;
+  int loaded_map_points_ = 0;
+
+  slam::MapIdentity RunMapIdentity() const;  // of this run: method, camera, pyramid
+  nlohmann::json MapJson(const slam::SequenceRun& run) const;
 };
 
 // SlamRunner(options).Run(progress, stop).
@@ -100,6 +119,6 @@ struct StageTiming {
 std::vector<StageTiming> SummarizeStages(const std::vector<slam::FrameOutcome>& frames,
                                          const std::vector<std::string>& stages);
 
-const char* TrackingStateName(slam::TrackingState state);
+using slam::TrackingStateName;
 
 }  // namespace noctua::eval

@@ -34,7 +34,18 @@ void CheckExclusionMask(const cv::Mat& mask, const cv::Size& size) {
 struct DynamicStage {
   features::DynamicMaskSource source;
   std::shared_ptr<dynamic::AsyncMaskPipeline> ahead;
+  std::shared_ptr<UsedMasks> used = std::make_shared<UsedMasks>();
 };
+
+// The stage's source with every mask it gives also handed to `used`.
+features::DynamicMaskSource Logged(features::DynamicMaskSource source,
+                                   std::shared_ptr<UsedMasks> used) {
+  return [source = std::move(source), used = std::move(used)](const cv::Mat& image) {
+    cv::Mat mask = source(image);
+    used->Add(mask);
+    return mask;
+  };
+}
 
 DynamicStage MakeDynamicStage(const MethodConfig& config) {
   DynamicStage stage;
@@ -62,11 +73,17 @@ DynamicStage MakeDynamicStage(const MethodConfig& config) {
   return stage;
 }
 
+DynamicStage MakeLoggedDynamicStage(const MethodConfig& config) {
+  DynamicStage stage = MakeDynamicStage(config);
+  if (stage.source) stage.source = Logged(std::move(stage.source), stage.used);
+  return stage;
+}
+
 // Our extractor in one of its configurations; its dynamic filter takes the stage's masks.
 class ExtractorMethod : public FeatureMethod {
  public:
   ExtractorMethod(const std::string& name, ExtractorOptions options, DynamicStage dynamic)
-      : FeatureMethod(name), detection_ahead_(std::move(dynamic.ahead)) {
+      : FeatureMethod(name, dynamic.used), detection_ahead_(std::move(dynamic.ahead)) {
     options.dynamic_filter.enabled = options.dynamic_filter.enabled || dynamic.source != nullptr;
     extractor_ = features::Extractor::Create(options);
     if (dynamic.source) extractor_->SetDynamicMaskSource(std::move(dynamic.source));
@@ -143,7 +160,7 @@ class DynamicRegionFeature2D : public cv::Feature2D {
 class OpenCvMethod : public FeatureMethod {
  public:
   OpenCvMethod(const std::string& name, cv::Ptr<cv::Feature2D> feature2d, DynamicStage dynamic)
-      : FeatureMethod(name),
+      : FeatureMethod(name, dynamic.used),
         wrapped_(dynamic.source != nullptr),
         feature2d_(dynamic.source ? cv::Ptr<cv::Feature2D>(cv::makePtr<DynamicRegionFeature2D>(
                                         std::move(feature2d), std::move(dynamic.source)))
@@ -219,6 +236,26 @@ class FastBriefDetector : public cv::Feature2D {
 
 }  // namespace
 
+void UsedMasks::Keep() {
+  const std::lock_guard<std::mutex> lock(mutex_);
+  keep_ = true;
+}
+
+void UsedMasks::Add(const cv::Mat& mask) {
+  const std::lock_guard<std::mutex> lock(mutex_);
+  if (!keep_) return;
+  if (masks_.size() == kMaxKept) masks_.pop_front();
+  masks_.push_back(mask);
+}
+
+cv::Mat UsedMasks::Take() {
+  const std::lock_guard<std::mutex> lock(mutex_);
+  if (masks_.empty()) return {};
+  cv::Mat mask = masks_.front();
+  masks_.pop_front();
+  return mask;
+}
+
 std::vector<std::string> MethodNames() {
   return {"fast", "orb-opencv", "orb", "he-orb", "clahe-orb", "paper", "noctua", "sift", "surf"};
 }
@@ -258,7 +295,7 @@ std::unique_ptr<FeatureMethod> CreateMethod(const std::string& name, const Metho
     throw Error("unknown method '" + name + "' (known: " + known + ")");
   }
   // Every method takes the dynamic stage: the detector is loaded for whichever is asked for.
-  DynamicStage dynamic = MakeDynamicStage(config);
+  DynamicStage dynamic = MakeLoggedDynamicStage(config);
   const features::PyramidFastOptions& fast = config.extractor.fast;
   if (name == "orb-opencv") {
     return std::make_unique<OpenCvMethod>(

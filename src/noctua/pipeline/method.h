@@ -1,6 +1,8 @@
 #pragma once
 
+#include <deque>
 #include <memory>
+#include <mutex>
 #include <opencv2/features2d.hpp>
 #include <string>
 #include <vector>
@@ -37,6 +39,23 @@ struct MethodConfig {
   }
 };
 
+// The dynamic masks a method's extraction used, in extraction order, for a viewer that draws them
+// with the frame they belong to. Nothing is kept until Keep() is called, so a run without a viewer
+// holds no masks; at most kMaxKept are kept (the oldest go first).
+class UsedMasks {
+ public:
+  static constexpr std::size_t kMaxKept = 32;
+  void Keep();
+  void Add(const cv::Mat& mask);  // called by the extraction
+  // The oldest kept mask, taken out; empty when there is none (e.g. no detector).
+  cv::Mat Take();
+
+ private:
+  std::mutex mutex_;
+  std::deque<cv::Mat> masks_;
+  bool keep_ = false;
+};
+
 // One feature method (ours or a baseline) behind one interface, so evaluation, SLAM and the
 // command line treat them alike.
 class FeatureMethod {
@@ -62,11 +81,16 @@ class FeatureMethod {
   // here first, in the same order; running on an image that was not fails with noctua::Error.
   virtual std::shared_ptr<dynamic::AsyncMaskPipeline> detection_ahead() const { return nullptr; }
 
+  // The dynamic masks the extraction used (see UsedMasks); never null.
+  std::shared_ptr<UsedMasks> used_masks() const { return used_masks_; }
+
  protected:
-  explicit FeatureMethod(std::string name) : name_(std::move(name)) {}
+  FeatureMethod(std::string name, std::shared_ptr<UsedMasks> used_masks)
+      : name_(std::move(name)), used_masks_(std::move(used_masks)) {}
 
  private:
   std::string name_;
+  std::shared_ptr<UsedMasks> used_masks_;
 };
 
 // Every method name CreateMethod accepts, in the order tables list them.

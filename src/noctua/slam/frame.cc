@@ -20,6 +20,40 @@ FrameFeatures::FrameFeatures(std::vector<cv::KeyPoint> keypoints, cv::Mat descri
                              const cv::Mat& depth_m, const geometry::PinholeCamera& camera,
                              double bf, double min_depth_m)
     : keypoints_(std::move(keypoints)), descriptors_(std::move(descriptors)), camera_(camera) {
+  CheckDescriptors();
+  if (depth_m.type() != CV_32FC1) throw Error("SLAM needs depth as CV_32F metres");
+  Undistort();
+  for (std::size_t i = 0; i < keypoints_.size(); ++i) {
+    const int u = static_cast<int>(std::lround(keypoints_[i].pt.x));
+    const int v = static_cast<int>(std::lround(keypoints_[i].pt.y));
+    double depth = 0.0;
+    if (u >= 0 && v >= 0 && u < depth_m.cols && v < depth_m.rows) {
+      const float value = depth_m.at<float>(v, u);
+      if (std::isfinite(value) && value >= min_depth_m) depth = value;
+    }
+    depth_.push_back(depth);
+    right_u_.push_back(depth > 0.0 ? undistorted_[i].x() - bf / depth : -1.0);
+  }
+  BuildGrid();
+}
+
+FrameFeatures::FrameFeatures(std::vector<cv::KeyPoint> keypoints, cv::Mat descriptors,
+                             std::vector<double> depth, std::vector<double> right_u,
+                             const geometry::PinholeCamera& camera)
+    : keypoints_(std::move(keypoints)),
+      depth_(std::move(depth)),
+      right_u_(std::move(right_u)),
+      descriptors_(std::move(descriptors)),
+      camera_(camera) {
+  CheckDescriptors();
+  if (depth_.size() != keypoints_.size() || right_u_.size() != keypoints_.size()) {
+    throw Error("SLAM features need one depth and one right coordinate per keypoint");
+  }
+  Undistort();
+  BuildGrid();
+}
+
+void FrameFeatures::CheckDescriptors() const {
   if (!keypoints_.empty() && (descriptors_.rows != static_cast<int>(keypoints_.size()) ||
                               descriptors_.type() != CV_8U || descriptors_.cols != 32)) {
     throw Error("SLAM needs 32-byte binary descriptors, one per keypoint (got " +
@@ -27,25 +61,18 @@ FrameFeatures::FrameFeatures(std::vector<cv::KeyPoint> keypoints, cv::Mat descri
                 std::to_string(descriptors_.cols) + " for " + std::to_string(keypoints_.size()) +
                 " keypoints)");
   }
-  if (depth_m.type() != CV_32FC1) throw Error("SLAM needs depth as CV_32F metres");
+}
 
+void FrameFeatures::Undistort() {
   std::vector<cv::Point2f> raw;
   raw.reserve(keypoints_.size());
   for (const auto& keypoint : keypoints_) raw.push_back(keypoint.pt);
   const std::vector<cv::Point2f> corrected = camera_.Undistort(raw);
-  for (std::size_t i = 0; i < keypoints_.size(); ++i) {
-    undistorted_.emplace_back(corrected[i].x, corrected[i].y);
-    const int u = static_cast<int>(std::lround(raw[i].x));
-    const int v = static_cast<int>(std::lround(raw[i].y));
-    double depth = 0.0;
-    if (u >= 0 && v >= 0 && u < depth_m.cols && v < depth_m.rows) {
-      const float value = depth_m.at<float>(v, u);
-      if (std::isfinite(value) && value >= min_depth_m) depth = value;
-    }
-    depth_.push_back(depth);
-    right_u_.push_back(depth > 0.0 ? undistorted_.back().x() - bf / depth : -1.0);
-  }
+  undistorted_.clear();
+  for (const auto& point : corrected) undistorted_.emplace_back(point.x, point.y);
+}
 
+void FrameFeatures::BuildGrid() {
   // Undistorted image bounds, from the corners as ORB-SLAM does.
   const double w = camera_.width();
   const double h = camera_.height();

@@ -30,6 +30,10 @@ class FrameFeatures {
   // detected position; keypoints outside any depth get depth 0.
   FrameFeatures(std::vector<cv::KeyPoint> keypoints, cv::Mat descriptors, const cv::Mat& depth_m,
                 const geometry::PinholeCamera& camera, double bf, double min_depth_m);
+  // Features restored from a saved map (map_io.h): depth and right coordinate per keypoint as
+  // the constructor above found them; undistorted positions and the grid are derived again.
+  FrameFeatures(std::vector<cv::KeyPoint> keypoints, cv::Mat descriptors, std::vector<double> depth,
+                std::vector<double> right_u, const geometry::PinholeCamera& camera);
 
   int size() const { return static_cast<int>(keypoints_.size()); }
   const cv::KeyPoint& keypoint(int i) const { return keypoints_[static_cast<std::size_t>(i)]; }
@@ -59,6 +63,11 @@ class FrameFeatures {
                           int max_level = -1) const;
 
  private:
+  void CheckDescriptors() const;
+  // Undistorted positions, image bounds and the search grid: all follow from keypoints and camera.
+  void Undistort();
+  void BuildGrid();
+
   static constexpr int kGridCols = 64;
   static constexpr int kGridRows = 48;
   std::vector<cv::KeyPoint> keypoints_;

@@ -271,4 +271,12 @@ int Map::NumMapPoints() const {
                                         [](const auto& point) { return !point->bad(); }));
 }
 
+std::vector<const MapPoint*> Map::MapPoints() const {
+  std::vector<const MapPoint*> good;
+  for (const auto& point : points_) {
+    if (!point->bad()) good.push_back(point.get());
+  }
+  return good;
+}
+
 }  // namespace noctua::slam

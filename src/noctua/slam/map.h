@@ -96,6 +96,9 @@ class MapPoint {
   long reclaim_mark_ = -1;  // the last Map::ReclaimMapPoints pass that found the point held
 
   friend class Map;
+  // Saving and loading (map_io.h) keep the derived fields as they are, so a loaded point
+  // matches and predicts its scale exactly as the saved one did.
+  friend class MapFile;
 };
 
 // A frame kept in the map: its features, pose, map points and covisibility links.
@@ -167,6 +170,8 @@ class Map {
   std::vector<KeyFrame*> KeyFrames() const;
   int NumKeyFrames() const;
   int NumMapPoints() const;
+  // Good map points.
+  std::vector<const MapPoint*> MapPoints() const;
   const std::vector<std::unique_ptr<KeyFrame>>& all_keyframes() const { return keyframes_; }
   // Every point ever made, culled and freed ones included.
   long NumMapPointsCreated() const { return next_point_id_; }
@@ -185,6 +190,8 @@ class Map {
   std::vector<std::unique_ptr<MapPoint>> points_;
   long next_point_id_ = 0;
   long reclaim_pass_ = 0;
+
+  friend class MapFile;  // map_io.h: saves the good points in id order
 };
 
 }  // namespace noctua::slam

@@ -89,7 +89,15 @@ struct LoadedFrame {
 struct PreparedFrame {
   RgbdSlam::Extracted extracted;
   double load_ms = 0.0;
+  cv::Mat bgr;  // kept for RunOptions::observe only
 };
+
+// The pose of the frame the tracker recorded last, when it has one.
+std::optional<geometry::Pose> LastPose(const Tracker& tracker) {
+  if (tracker.records().empty() || tracker.records().back().reference == nullptr) return {};
+  const FrameRecord& record = tracker.records().back();
+  return record.pose_c_r * record.reference->pose_cw();
+}
 
 // Items 0..count-1 made in order on a thread of their own, up to `capacity` ahead of the one
 // the consumer takes, so that a slow item on either side (a keyframe's local BA, a frame whose
@@ -164,6 +172,11 @@ SequenceRun RunSequence(const io::Sequence& sequence, double depth_factor,
                         const geometry::PinholeCamera& camera, cv::Ptr<cv::Feature2D> extractor,
                         const SlamOptions& options, const RunOptions& run_options) {
   RgbdSlam slam(camera, std::move(extractor), options);
+  return RunSequence(slam, sequence, depth_factor, run_options);
+}
+
+SequenceRun RunSequence(RgbdSlam& slam, const io::Sequence& sequence, double depth_factor,
+                        const RunOptions& run_options) {
   const int count = run_options.max_frames > 0
                         ? std::min(run_options.max_frames, static_cast<int>(sequence.size()))
                         : static_cast<int>(sequence.size());
@@ -188,6 +201,7 @@ SequenceRun RunSequence(const io::Sequence& sequence, double depth_factor,
     PreparedFrame prepared;
     prepared.load_ms = loaded.load_ms;
     prepared.extracted = slam.Extract(loaded.images.bgr, loaded.images.depth_m, loaded.timestamp);
+    if (run_options.observe) prepared.bgr = loaded.images.bgr;
     return prepared;
   };
   const int load_ahead = run_options.lookahead ? run_options.lookahead_frames : 0;
@@ -225,6 +239,7 @@ SequenceRun RunSequence(const io::Sequence& sequence, double depth_factor,
     Stopwatch total;
     PreparedFrame prepared = extraction ? extraction->Pop() : prepare_in_line(i);
     const double timestamp = prepared.extracted.timestamp;
+    const std::shared_ptr<const FrameFeatures> features = prepared.extracted.features;
     const TrackResult result = slam.Track(std::move(prepared.extracted));
     FrameOutcome outcome;
     outcome.timestamp = timestamp;
@@ -248,6 +263,10 @@ SequenceRun RunSequence(const io::Sequence& sequence, double depth_factor,
       run.lost_frames.push_back(i);
     }
     run.frames.push_back(outcome);
+    if (run_options.observe) {
+      run_options.observe({i, prepared.bgr, features.get(), &result, &run.frames.back(),
+                           LastPose(slam.tracker()), &slam.tracker().map()});
+    }
     if (run_options.progress) run_options.progress(i, count, run.frames.back());
   }
   run.wall_s = run_watch.ElapsedMs() / 1000.0;

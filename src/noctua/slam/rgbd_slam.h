@@ -4,6 +4,7 @@
 #include <map>
 #include <memory>
 #include <opencv2/features2d.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -47,6 +48,8 @@ class RgbdSlam {
   // left out rather than guessed), with the latest keyframe poses.
   io::Trajectory Trajectory() const;
   const Tracker& tracker() const { return tracker_; }
+  // Starts from a saved map (Tracker::UseMap); before the first frame.
+  void UseMap(Map map, bool localize) { tracker_.UseMap(std::move(map), localize); }
 
  private:
   geometry::PinholeCamera camera_;
@@ -98,10 +101,26 @@ struct SequenceRun {
   }
 };
 
+class Map;
+
+// A frame as a viewer sees it once it is tracked (RunOptions::observe); the pointers are valid
+// during the call only.
+struct FrameView {
+  int index = 0;
+  cv::Mat bgr;  // the colour image as extracted (after RunOptions::transform_image)
+  const FrameFeatures* features = nullptr;
+  const TrackResult* result = nullptr;  // with the moving flags, one per keypoint
+  const FrameOutcome* outcome = nullptr;
+  std::optional<geometry::Pose> pose_cw;  // none when the frame has no pose
+  const Map* map = nullptr;
+};
+
 struct RunOptions {
   int max_frames = 0;  // 0: all
   // Called after every frame (index, count, outcome), e.g. for a progress bar.
   std::function<void(int, int, const FrameOutcome&)> progress;
+  // Called after every frame, before `progress`, with what a viewer draws (viz/viewer.h).
+  std::function<void(const FrameView&)> observe;
   // Applied to each frame's colour image before extraction (tests: darkening, black frames).
   std::function<cv::Mat(int, const cv::Mat&)> transform_image;
   // Checked before every frame; when it returns true the run ends there and returns what was
@@ -128,5 +147,9 @@ struct RunOptions {
 SequenceRun RunSequence(const io::Sequence& sequence, double depth_factor,
                         const geometry::PinholeCamera& camera, cv::Ptr<cv::Feature2D> extractor,
                         const SlamOptions& options, const RunOptions& run_options = RunOptions());
+// The same with a SLAM the caller made (e.g. one started from a saved map) and keeps, so that
+// its map can be read or saved after the run.
+SequenceRun RunSequence(RgbdSlam& slam, const io::Sequence& sequence, double depth_factor,
+                        const RunOptions& run_options = RunOptions());
 
 }  // namespace noctua::slam

@@ -7,9 +7,23 @@
 #include <set>
 
 #include "noctua/slam/optimizer.h"
+#include "noctua/util/error.h"
 #include "noctua/util/timer.h"
 
 namespace noctua::slam {
+const char* TrackingStateName(TrackingState state) {
+  switch (state) {
+    case TrackingState::kNotInitialised:
+      return "not-initialised";
+    case TrackingState::kOk:
+      return "ok";
+    case TrackingState::kCoasting:
+      return "coasting";
+    case TrackingState::kLost:
+      return "lost";
+  }
+  return "unknown";
+}
 
 Tracker::Tracker(const SlamOptions& options)
     : options_(options),
@@ -87,7 +101,7 @@ TrackResult Tracker::Track(Frame frame) {
       // the frames before it (a fast turn) places them with that pose's error, and every run
       // that made it there parted from the others (docs/slam.md, "Where runs part"). It waits
       // for a surer frame.
-      if (NeedNewKeyFrame() && AsCertainAsRecentFrames()) {
+      if (!localize_ && NeedNewKeyFrame() && AsCertainAsRecentFrames()) {
         CreateNewKeyFrame();
         result.new_keyframe = true;
       }
@@ -120,6 +134,18 @@ TrackResult Tracker::Track(Frame frame) {
   // Points are culled only while a keyframe is mapped.
   if (result.new_keyframe) ReclaimMapPoints();
   return result;
+}
+
+void Tracker::UseMap(Map map, bool localize) {
+  if (!records_.empty()) throw Error("slam: a map can only be loaded before the first frame");
+  const std::vector<KeyFrame*> keyframes = map.KeyFrames();
+  if (keyframes.empty()) throw Error("slam: the map to start from has no keyframe");
+  map_ = std::move(map);
+  reference_ = last_keyframe_ = keyframes.back();
+  local_keyframes_ = {last_keyframe_};
+  localize_ = localize;
+  // Lost in a known map: the first frame goes straight to relocalisation.
+  state_ = TrackingState::kLost;
 }
 
 bool Tracker::Coast(TrackResult& result) {
@@ -225,12 +251,16 @@ bool Tracker::TrackWithMotionModel() {
   if (matches < 20) return false;
   RejectMovingMatches(false);
   OptimizePose(frame, pyramid_, options_.bf);
-  return DiscardOutliers() >= 10;
+  const int in_map = DiscardOutliers();
+  // Localising in a map that cannot grow, the last frame's depth points carry the pose across a
+  // stretch the map covers thinly (ORB-SLAM's localisation mode does the same).
+  return in_map >= 10 || (localize_ && in_map + odometry_inliers_ >= 20);
 }
 
 int Tracker::DiscardOutliers() {
   Frame& frame = *current_;
   int in_map = 0;
+  odometry_inliers_ = 0;
   for (std::size_t i = 0; i < frame.map_points.size(); ++i) {
     MapPoint* point = frame.map_points[i];
     if (point == nullptr) continue;
@@ -240,6 +270,8 @@ int Tracker::DiscardOutliers() {
       point->last_frame_seen = frame.id;
     } else if (point->num_observations() > 0) {
       ++in_map;
+    } else {
+      ++odometry_inliers_;
     }
   }
   return in_map;
@@ -439,12 +471,13 @@ bool Tracker::TrackLocalMap() {
   RejectMovingMatches(true);
   OptimizePose(frame, pyramid_, options_.bf);
   inliers_ = 0;
+  odometry_inliers_ = 0;
   for (std::size_t i = 0; i < frame.map_points.size(); ++i) {
     MapPoint* point = frame.map_points[i];
     if (point == nullptr) continue;
     if (!frame.outlier[i]) {
       point->IncreaseFound();
-      if (point->num_observations() > 0) ++inliers_;
+      ++(point->num_observations() > 0 ? inliers_ : odometry_inliers_);
     } else {
       frame.map_points[i] = nullptr;
       frame.outlier[i] = false;
@@ -456,6 +489,9 @@ bool Tracker::TrackLocalMap() {
     return false;
   }
   if (inliers_ >= options_.min_tracked_inliers) return true;
+  // Localising (TrackWithMotionModel): where the map thins out, the depth points of the last
+  // frame carry the pose until the local map's points are found again.
+  if (localize_ && inliers_ + odometry_inliers_ >= options_.min_tracked_inliers) return true;
   // Fewer inliers than usual, as where people cover most of the view: the pose stands when the
   // few static points that remain still fix it as well as a normal frame's do.
   return inliers_ >= options_.min_certain_inliers && AsCertainAsRecentFrames();
@@ -492,7 +528,9 @@ int Tracker::RejectMovingMatches(bool vote) {
     frame.outlier[i] = false;
     frame.moving[i] = true;
     ++rejected;
-    if (vote && in_map && point->moving_frames >= options_.moving_frames_to_cull) point->SetBad();
+    if (vote && in_map && !localize_ && point->moving_frames >= options_.moving_frames_to_cull) {
+      point->SetBad();
+    }
   }
   return rejected;
 }

@@ -28,6 +28,9 @@ enum class TrackingState {
   kLost,
 };
 
+// "not-initialised", "ok", "coasting" or "lost", as reports write it.
+const char* TrackingStateName(TrackingState state);
+
 // How one frame went.
 struct TrackResult {
   TrackingState state = TrackingState::kNotInitialised;
@@ -64,6 +67,13 @@ class Tracker {
 
   TrackResult Track(Frame frame);
 
+  // Starts from a saved map (map_io.h) instead of a new one, before the first frame: that frame
+  // is relocalised in the map. With `localize` the map stays exactly as loaded: no keyframes or
+  // points are added, culled or refined, and tracking only localises the camera in it.
+  // Throws noctua::Error after the first frame or for a map without keyframes.
+  void UseMap(Map map, bool localize);
+  bool localize() const { return localize_; }
+
   const Map& map() const { return map_; }
   const std::vector<FrameRecord>& records() const { return records_; }
   TrackingState state() const { return state_; }
@@ -99,6 +109,7 @@ class Tracker {
   Matcher strict_matcher_;  // ratio 0.7 (reference keyframe, relocalisation)
 
   TrackingState state_ = TrackingState::kNotInitialised;
+  bool localize_ = false;
   std::unique_ptr<Frame> current_;
   std::unique_ptr<Frame> last_;
   std::optional<geometry::Pose> velocity_;
@@ -109,6 +120,8 @@ class Tracker {
   long last_keyframe_frame_id_ = 0;
   long last_relocalisation_frame_id_ = -1000;
   int inliers_ = 0;
+  // Inliers of the current frame that are the last frame's temporary depth points, not map points.
+  int odometry_inliers_ = 0;
   PoseUncertainty uncertainty_;  // of the current frame's pose after local-map tracking
   std::deque<PoseUncertainty> recent_uncertainty_;  // of the last tracked frames, oldest first
   std::vector<KeyFrame*> local_keyframes_;
