@@ -12,6 +12,8 @@ packages=(
   gnuplot-nox
   libfftw3-dev
   pybind11-dev python3-dev python3-numpy python3-opencv python3-pytest
+  librosbag-storage-dev libsensor-msgs-dev libopenni2-dev
+  python3-rosbag python3-sensor-msgs
 )
 missing=()
 for package in "${packages[@]}"; do

@@ -42,6 +42,7 @@ class InterruptGuard {
 
 struct SlamArguments {
   eval::SlamRunOptions run;
+  std::string live;  // the camera's URI with --live
   MethodFlags method;
   std::string out;
   bool force = false;
@@ -51,6 +52,12 @@ struct SlamArguments {
 void PrintProgress(int every, int index, int count, const slam::FrameOutcome& outcome,
                    double rss_mb) {
   if ((index + 1) % every != 0 && index + 1 != count) return;
+  if (count == 0) {  // a camera: no end known
+    std::fprintf(stderr, "slam: %d frames  %s, %d inliers, %d keyframes, %d points, %.1f MB\n",
+                 index + 1, eval::TrackingStateName(outcome.state), outcome.inliers,
+                 outcome.keyframes, outcome.map_points, rss_mb);
+    return;
+  }
   const int width = 30;
   const int filled = (index + 1) * width / count;
   std::fprintf(stderr, "slam: [%s%s] %d/%d  %s, %d inliers, %d keyframes, %d points, %.1f MB\n",
@@ -66,6 +73,10 @@ void RunSlam(SlamArguments args) {
   CheckOption(args.run.max_frames >= 0, "--max-frames must not be negative");
   CheckOption(args.run.detect_every >= 1, "--detect-every must be at least 1");
   if (args.method.config.empty()) throw Error("slam needs --config (a camera preset, see config/)");
+  CheckOption(!args.run.source.dataset.empty() || !args.run.source.bag.empty() ||
+                  args.run.source.live.has_value(),
+              "slam needs --dataset, --bag or --live");
+  CheckOption(args.run.source.replay_rate >= 0.0, "--replay-rate must not be negative");
   args.run.config = args.method.config;
   args.run.method = args.method.method;
   args.run.detector_model = args.method.detector_model;
@@ -92,14 +103,48 @@ void RunSlam(SlamArguments args) {
   }
 }
 
+// Where the frames come from: exactly one of a folder, a bag and a camera.
+void AddSourceFlags(CLI::App& command, SlamArguments& args) {
+  io::FrameSourceOptions& source = args.run.source;
+  auto* dataset = command.add_option("-d,--dataset", source.dataset,
+                                     "Sequence folder (TUM RGB-D or OpenLORIS)");
+  auto* bag = command.add_option(
+      "--bag", source.bag, "ROS1 bag of sensor_msgs/Image colour and depth (docs/datasets.md)");
+  auto* live = command
+                   .add_option("--live", args.live,
+                               "OpenNI2 camera (Kinect, Xtion) at its rate, frames dropped "
+                               "while the SLAM is busy; optional device URI")
+                   ->expected(0, 1);
+  dataset->excludes(bag)->excludes(live);
+  bag->excludes(live);
+  command.add_option("--rgb-topic", source.rgb_topic, "The bag's colour topic (rgb8, bgr8)")
+      ->capture_default_str()
+      ->needs(bag);
+  command
+      .add_option("--depth-topic", source.depth_topic,
+                  "The bag's depth topic (32FC1 metres, 16UC1 millimetres)")
+      ->capture_default_str()
+      ->needs(bag);
+  command
+      .add_option("--groundtruth", source.ground_truth,
+                  "TUM-format ground truth of the bag, for ATE/RPE")
+      ->needs(bag);
+  command
+      .add_option("--replay-rate", source.replay_rate,
+                  "Play the folder or bag at this multiple of its recording's rate, dropping "
+                  "frames that arrive while the SLAM is busy, as a camera does (0: every frame)")
+      ->excludes(live);
+}
+
 }  // namespace
 
 void AddSlamCommand(CLI::App& app) {
   auto args = std::make_shared<SlamArguments>();
   CLI::App* command = app.add_subcommand(
-      "slam", "RGB-D SLAM on a TUM or OpenLORIS sequence; TUM trajectory, timings, ATE/RPE");
-  command->add_option("-d,--dataset", args->run.dataset, "Sequence folder (TUM RGB-D or OpenLORIS)")
-      ->required();
+      "slam",
+      "RGB-D SLAM on a TUM or OpenLORIS sequence, a ROS bag or an OpenNI2 camera; TUM "
+      "trajectory, timings, ATE/RPE");
+  AddSourceFlags(*command, *args);
   AddMethodFlags(*command, args->method);
   command->add_option("-o,--out", args->out, "Output folder")->required();
   command->add_flag("--force", args->force, "Write into a non-empty output folder");
@@ -133,7 +178,10 @@ void AddSlamCommand(CLI::App& app) {
   command->add_flag("--reject-moving-points", args->run.reject_moving_points,
                     "Keep points that move against the static world out of tracking and mapping, "
                     "found from geometry alone (no detector needed; docs/slam.md, Moving points)");
-  command->callback([args] { RunSlam(*args); });
+  command->callback([args, command] {
+    if (command->count("--live") > 0) args->run.source.live = args->live;
+    RunSlam(*args);
+  });
 }
 
 }  // namespace noctua::app

@@ -77,7 +77,7 @@ py::dict RunSlamOnSequence(const std::string& dataset, const std::string& config
                            const std::string& method, const py::object& detector, int max_frames,
                            const py::object& out, double brightness, bool sequential, bool force) {
   eval::SlamRunOptions options;
-  options.dataset = dataset;
+  options.source.dataset = dataset;
   options.config = config;
   options.method = method;
   options.detector_model = PathArgument(detector).string();

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <memory>
 
 #include "noctua/eval/trajectory_plot.h"
@@ -23,7 +24,9 @@ nlohmann::json RunJson(const SlamRunOptions& options, const SlamRunReport& repor
                        const pipeline::FeatureMethod& method) {
   const slam::SequenceRun& run = report.run;
   nlohmann::json json;
-  json["dataset"] = options.dataset.string();
+  json["source"] = report.source;
+  if (!options.source.dataset.empty()) json["dataset"] = options.source.dataset.string();
+  if (!options.source.bag.empty()) json["bag"] = options.source.bag.string();
   json["config"] = options.config.string();
   json["method"] = options.method;
   json["brightness"] = options.brightness;
@@ -39,6 +42,14 @@ nlohmann::json RunJson(const SlamRunOptions& options, const SlamRunReport& repor
   json["keyframes"] = run.keyframes;
   json["map_points"] = run.map_points;
   json["interrupted"] = run.interrupted;
+  // Real time: the frames the source skipped while the SLAM was busy; frames + dropped_frames
+  // is what the source delivered.
+  json["replay_rate"] = options.source.replay_rate;
+  json["dropped_frames"] = run.dropped_frames.size();
+  json["dropped_frame_indices"] = nlohmann::json::array();
+  for (const io::DroppedFrame& dropped : run.dropped_frames) {
+    json["dropped_frame_indices"].push_back(dropped.index);
+  }
   json["wall_s"] = run.wall_s;
   json["frames_per_second"] = run.FramesPerSecond();
   json["overlap_extraction"] = !options.sequential;
@@ -76,11 +87,12 @@ std::string CountsMarkdown(const SlamRunReport& report, bool sequential) {
   char counts[320];
   std::snprintf(
       counts, sizeof(counts),
-      "\nframes %zu, with a pose %zu (coasting %zu), lost %zu, keyframes %d, map points %d, "
-      "peak RSS %.1f MB\n"
+      "\nframes %zu, with a pose %zu (coasting %zu), lost %zu, dropped %zu, keyframes %d, "
+      "map points %d, peak RSS %.1f MB\n"
       "%.1f frames/s (%.2f s for the run, loading included, %s)\n",
       run.frames.size(), run.trajectory.size(), run.coasted_frames.size(), run.lost_frames.size(),
-      run.keyframes, run.map_points, PeakResidentMemoryMb(), run.FramesPerSecond(), run.wall_s,
+      run.dropped_frames.size(), run.keyframes, run.map_points, PeakResidentMemoryMb(),
+      run.FramesPerSecond(), run.wall_s,
       sequential ? "sequential" : "extraction overlapped with tracking");
   return counts;
 }
@@ -133,6 +145,14 @@ pipeline::MethodConfig RunMethodConfig(const SlamRunOptions& options) {
   return config;
 }
 
+io::FrameSourceOptions SourceOptions(const SlamRunOptions& options, const slam::SlamSetup& setup) {
+  io::FrameSourceOptions source = options.source;
+  source.depth_factor = setup.camera.depth_factor;
+  source.ground_truth_convention = setup.camera.ground_truth;
+  source.max_frames = options.max_frames;
+  return source;
+}
+
 }  // namespace
 
 SlamRunner::SlamRunner(const SlamRunOptions& options)
@@ -140,13 +160,11 @@ SlamRunner::SlamRunner(const SlamRunOptions& options)
       setup_(CheckedSetup(options)),
       config_(RunMethodConfig(options)),
       method_(pipeline::CreateMethod(options.method, config_)),
-      sequence_(io::Sequence::Open(options.dataset,
-                                   {.ground_truth_convention = setup_.camera.ground_truth})) {}
+      source_(io::OpenFrameSource(SourceOptions(options, setup_))) {}
 
 SlamRunReport SlamRunner::Run(const SlamProgress& progress, const std::function<bool()>& stop) {
   SlamRunReport report;
   slam::RunOptions run_options;
-  run_options.max_frames = options_.max_frames;
   run_options.overlap_extraction = !options_.sequential;
   if (const auto masks = method_->detection_ahead()) {
     run_options.lookahead = [masks](const cv::Mat& image, const cv::Mat& depth_m) {
@@ -159,19 +177,27 @@ SlamRunReport SlamRunner::Run(const SlamProgress& progress, const std::function<
     if (progress) progress(index, count, outcome, report.rss_mb.back());
   };
   if (options_.brightness < 1.0) {
-    run_options.transform_image =
-        sim::SequenceDarkener(io::ReadImage8U(sequence_.frame(0).rgb_path), options_.brightness,
-                              sim::SensorModelByName(options_.sensor), options_.seed);
+    // Darkened relative to the first frame, which only the source's first frame can give.
+    run_options.transform_image = [this, darken = sim::FrameTransform()](
+                                      int index, const cv::Mat& image) mutable {
+      if (!darken) {
+        darken = sim::SequenceDarkener(image, options_.brightness,
+                                       sim::SensorModelByName(options_.sensor), options_.seed);
+      }
+      return darken(index, image);
+    };
   }
   run_options.stop = stop;
-  report.run = slam::RunSequence(sequence_, setup_.camera.depth_factor, setup_.camera.Camera(),
-                                 method_->feature2d(), setup_.options, run_options);
-  report.sequence_frames = sequence_.size();
+  report.run = slam::RunFrames(*source_, setup_.camera.Camera(), method_->feature2d(),
+                               setup_.options, run_options);
+  report.source = source_->Describe();
+  report.sequence_frames =
+      source_->size().value_or(report.run.frames.size() + report.run.dropped_frames.size());
   report.json = RunJson(options_, report, config_, *method_);
   report.markdown =
       TimingMarkdown(SummarizeStages(report.run.frames, SlamReportStages()), report.json) +
       CountsMarkdown(report, options_.sequential);
-  AddTrajectoryErrors(sequence_.ground_truth(), report);
+  AddTrajectoryErrors(source_->ground_truth(), report);
   return report;
 }
 
@@ -205,6 +231,38 @@ const char* TrackingStateName(slam::TrackingState state) {
   return "unknown";
 }
 
+namespace {
+
+std::string FrameRow(std::size_t i, const slam::FrameOutcome& f,
+                     const std::vector<std::string>& stages, double rss_mb) {
+  // A frame without a pose has no confidence: its sigma columns stay empty.
+  char sigma[64] = ",";
+  if (std::isfinite(f.position_sigma_m)) {
+    std::snprintf(sigma, sizeof(sigma), "%.2f,%.3f", 1000.0 * f.position_sigma_m,
+                  f.rotation_sigma_deg);
+  }
+  char buffer[192];
+  std::snprintf(buffer, sizeof(buffer), "%zu,%.6f,%s,%s,%d,%d,%d,%s,%d,%d,%d,%.1f", i, f.timestamp,
+                TrackingStateName(f.state), f.method.c_str(), f.keypoints, f.inliers,
+                f.moving_keypoints, sigma, f.new_keyframe ? 1 : 0, f.keyframes, f.map_points,
+                rss_mb);
+  std::string row = buffer;
+  for (const auto& stage : stages) {
+    const auto found = f.stage_ms.find(stage);
+    std::snprintf(buffer, sizeof(buffer), ",%.3f", found == f.stage_ms.end() ? 0.0 : found->second);
+    row += buffer;
+  }
+  return row + "\n";
+}
+
+std::string DroppedRow(const io::DroppedFrame& dropped, std::size_t columns) {
+  char buffer[64];
+  std::snprintf(buffer, sizeof(buffer), "%d,%.6f,dropped", dropped.index, dropped.timestamp);
+  return buffer + std::string(columns - 3, ',') + "\n";
+}
+
+}  // namespace
+
 std::string FramesCsv(const slam::SequenceRun& run, const std::vector<std::string>& stages,
                       const std::vector<double>& rss_mb) {
   std::string csv =
@@ -212,28 +270,22 @@ std::string FramesCsv(const slam::SequenceRun& run, const std::vector<std::strin
       "rotation_sigma_deg,keyframe,keyframes,map_points,rss_mb";
   for (const auto& stage : stages) csv.append(",").append(stage).append("_ms");
   csv += "\n";
-  char buffer[192];
+  const std::size_t columns = 13 + stages.size();
+  std::size_t next_dropped = 0;
+  const auto dropped_before = [&](int index) {
+    for (;
+         next_dropped < run.dropped_frames.size() && run.dropped_frames[next_dropped].index < index;
+         ++next_dropped) {
+      csv += DroppedRow(run.dropped_frames[next_dropped], columns);
+    }
+  };
   for (std::size_t i = 0; i < run.frames.size(); ++i) {
     const slam::FrameOutcome& f = run.frames[i];
-    // A frame without a pose has no confidence: its sigma columns stay empty.
-    char sigma[64] = ",";
-    if (std::isfinite(f.position_sigma_m)) {
-      std::snprintf(sigma, sizeof(sigma), "%.2f,%.3f", 1000.0 * f.position_sigma_m,
-                    f.rotation_sigma_deg);
-    }
-    std::snprintf(buffer, sizeof(buffer), "%zu,%.6f,%s,%s,%d,%d,%d,%s,%d,%d,%d,%.1f", i,
-                  f.timestamp, TrackingStateName(f.state), f.method.c_str(), f.keypoints, f.inliers,
-                  f.moving_keypoints, sigma, f.new_keyframe ? 1 : 0, f.keyframes, f.map_points,
-                  i < rss_mb.size() ? rss_mb[i] : 0.0);
-    csv += buffer;
-    for (const auto& stage : stages) {
-      const auto found = f.stage_ms.find(stage);
-      std::snprintf(buffer, sizeof(buffer), ",%.3f",
-                    found == f.stage_ms.end() ? 0.0 : found->second);
-      csv += buffer;
-    }
-    csv += "\n";
+    dropped_before(f.index);
+    csv +=
+        FrameRow(static_cast<std::size_t>(f.index), f, stages, i < rss_mb.size() ? rss_mb[i] : 0.0);
   }
+  dropped_before(std::numeric_limits<int>::max());
   return csv;
 }
 
