@@ -12,6 +12,7 @@
 #include "noctua/io/output_dir.h"
 #include "noctua/sim/sensor_model.h"
 #include "noctua/util/error.h"
+#include "source_flags.h"
 
 namespace noctua::app {
 namespace {
@@ -42,7 +43,7 @@ class InterruptGuard {
 
 struct SlamArguments {
   eval::SlamRunOptions run;
-  std::string live;  // the camera's URI with --live
+  SourceFlags source;
   MethodFlags method;
   std::string out;
   bool force = false;
@@ -103,39 +104,6 @@ void RunSlam(SlamArguments args) {
   }
 }
 
-// Where the frames come from: exactly one of a folder, a bag and a camera.
-void AddSourceFlags(CLI::App& command, SlamArguments& args) {
-  io::FrameSourceOptions& source = args.run.source;
-  auto* dataset = command.add_option("-d,--dataset", source.dataset,
-                                     "Sequence folder (TUM RGB-D or OpenLORIS)");
-  auto* bag = command.add_option(
-      "--bag", source.bag, "ROS1 bag of sensor_msgs/Image colour and depth (docs/datasets.md)");
-  auto* live = command
-                   .add_option("--live", args.live,
-                               "OpenNI2 camera (Kinect, Xtion) at its rate, frames dropped "
-                               "while the SLAM is busy; optional device URI")
-                   ->expected(0, 1);
-  dataset->excludes(bag)->excludes(live);
-  bag->excludes(live);
-  command.add_option("--rgb-topic", source.rgb_topic, "The bag's colour topic (rgb8, bgr8)")
-      ->capture_default_str()
-      ->needs(bag);
-  command
-      .add_option("--depth-topic", source.depth_topic,
-                  "The bag's depth topic (32FC1 metres, 16UC1 millimetres)")
-      ->capture_default_str()
-      ->needs(bag);
-  command
-      .add_option("--groundtruth", source.ground_truth,
-                  "TUM-format ground truth of the bag, for ATE/RPE")
-      ->needs(bag);
-  command
-      .add_option("--replay-rate", source.replay_rate,
-                  "Play the folder or bag at this multiple of its recording's rate, dropping "
-                  "frames that arrive while the SLAM is busy, as a camera does (0: every frame)")
-      ->excludes(live);
-}
-
 }  // namespace
 
 void AddSlamCommand(CLI::App& app) {
@@ -144,7 +112,7 @@ void AddSlamCommand(CLI::App& app) {
       "slam",
       "RGB-D SLAM on a TUM or OpenLORIS sequence, a ROS bag or an OpenNI2 camera; TUM "
       "trajectory, timings, ATE/RPE");
-  AddSourceFlags(*command, *args);
+  AddSourceFlags(*command, args->source);
   AddMethodFlags(*command, args->method);
   command->add_option("-o,--out", args->out, "Output folder")->required();
   command->add_flag("--force", args->force, "Write into a non-empty output folder");
@@ -179,7 +147,7 @@ void AddSlamCommand(CLI::App& app) {
                     "Keep points that move against the static world out of tracking and mapping, "
                     "found from geometry alone (no detector needed; docs/slam.md, Moving points)");
   command->callback([args, command] {
-    if (command->count("--live") > 0) args->run.source.live = args->live;
+    args->run.source = args->source.Options(*command);
     RunSlam(*args);
   });
 }
