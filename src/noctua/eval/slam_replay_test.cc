@@ -70,8 +70,8 @@ class MemorySource : public io::FrameSource {
 };
 
 // 50 times the recording's rate offers the 24 frames within 16 ms, far faster than the SLAM
-// takes them: most are dropped, yet the first is always tracked (nothing is busy then) and so
-// is the last (nothing replaces it).
+// takes them: most are dropped (even the first, when the SLAM's threads are not yet taking),
+// yet the last is always tracked (nothing replaces it).
 TEST(SlamReplayTest, FarTooFastDropsFramesAndCountsEveryOne) {
   const slam::SlamSetup setup = slam::LoadSlamSetup("config/tum_fr1.yaml");
   io::FolderSource folder(io::Sequence::Open(testing::DataDir() / "tum_fr1_rpy_200"),
@@ -83,7 +83,6 @@ TEST(SlamReplayTest, FarTooFastDropsFramesAndCountsEveryOne) {
   const slam::SequenceRun& run = report.run;
   EXPECT_GT(run.dropped_frames.size(), 0U);
   ASSERT_FALSE(run.frames.empty());
-  EXPECT_EQ(run.frames.front().index, 0);
   EXPECT_EQ(run.frames.back().index, kFrames - 1);
   EXPECT_EQ(run.frames.size() + run.dropped_frames.size(), static_cast<std::size_t>(kFrames));
   const std::string csv = FramesCsv(run, SlamReportStages(), {});

@@ -7,7 +7,6 @@
 
 #include "noctua/eval/trajectory_plot.h"
 #include "noctua/eval/trajectory_report.h"
-#include "noctua/io/image_file.h"
 #include "noctua/io/output_dir.h"
 #include "noctua/pipeline/method.h"
 #include "noctua/pipeline/method_config.h"
