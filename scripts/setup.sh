@@ -13,6 +13,8 @@ packages=(
   libfftw3-dev
   libx11-dev xvfb
   pybind11-dev python3-dev python3-numpy python3-opencv python3-pytest
+  librosbag-storage-dev libsensor-msgs-dev libopenni2-dev
+  python3-rosbag python3-sensor-msgs
 )
 missing=()
 for package in "${packages[@]}"; do

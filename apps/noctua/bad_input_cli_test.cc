@@ -202,6 +202,33 @@ TEST_F(BadInputCliTest, UnusableMapIsRefusedBeforeTheOutputFolderIsMade) {
   EXPECT_FALSE(fs::exists(out));
 }
 
+// No camera on a build machine: --live says so, exits 1 and creates nothing.
+TEST_F(BadInputCliTest, LiveWithoutACameraSaysSoAndExitsOne) {
+  const fs::path out = dir_ / "live_out";
+  const auto result = RunNoctua("slam --live --config " + Config() + " --out " + out.string());
+  if (result.exit_code == 0) GTEST_SKIP() << "an OpenNI2 camera is connected";
+  EXPECT_EQ(result.exit_code, 1);
+  EXPECT_THAT(result.output, HasSubstr("no OpenNI2 camera found"));
+  EXPECT_FALSE(fs::exists(out));
+}
+
+TEST_F(BadInputCliTest, ABagThatIsNotThereOrTruncatedIsNamed) {
+  const fs::path out = dir_ / "bag_out";
+  const auto missing = RunNoctua("slam --bag " + (dir_ / "none.bag").string() + " --config " +
+                                 Config() + " --out " + out.string());
+  EXPECT_EQ(missing.exit_code, 1);
+  EXPECT_THAT(missing.output, HasSubstr("none.bag: no such bag file"));
+  std::ofstream(dir_ / "half.bag") << "#ROSBAG V2.0\n";
+  const auto truncated = RunNoctua("slam --bag " + (dir_ / "half.bag").string() + " --config " +
+                                   Config() + " --out " + out.string());
+  EXPECT_EQ(truncated.exit_code, 1);
+  EXPECT_THAT(truncated.output, AllOf(HasSubstr("half.bag"), HasSubstr("truncated")));
+  const auto both = RunNoctua("slam --bag x.bag --dataset " + Fr1Dir().string() + " --config " +
+                              Config() + " --out " + out.string());
+  EXPECT_NE(both.exit_code, 0);
+  EXPECT_FALSE(fs::exists(out));
+}
+
 TEST_F(BadInputCliTest, OneFrameSequenceRunsToTheEnd) {
   const fs::path out = dir_ / "one_out";
   const auto result = RunNoctua("slam --dataset " + Fr1Subset("one", 1).string() + " --config " +

@@ -12,6 +12,7 @@
 #include "noctua/io/output_dir.h"
 #include "noctua/sim/sensor_model.h"
 #include "noctua/util/error.h"
+#include "source_flags.h"
 
 namespace noctua::app {
 namespace {
@@ -42,6 +43,7 @@ class InterruptGuard {
 
 struct SlamArguments {
   eval::SlamRunOptions run;
+  SourceFlags source;
   MethodFlags method;
   std::string out;
   bool force = false;
@@ -51,6 +53,12 @@ struct SlamArguments {
 void PrintProgress(int every, int index, int count, const slam::FrameOutcome& outcome,
                    double rss_mb) {
   if ((index + 1) % every != 0 && index + 1 != count) return;
+  if (count == 0) {  // a camera: no end known
+    std::fprintf(stderr, "slam: %d frames  %s, %d inliers, %d keyframes, %d points, %.1f MB\n",
+                 index + 1, eval::TrackingStateName(outcome.state), outcome.inliers,
+                 outcome.keyframes, outcome.map_points, rss_mb);
+    return;
+  }
   const int width = 30;
   const int filled = (index + 1) * width / count;
   std::fprintf(stderr, "slam: [%s%s] %d/%d  %s, %d inliers, %d keyframes, %d points, %.1f MB\n",
@@ -66,6 +74,10 @@ void RunSlam(SlamArguments args) {
   CheckOption(args.run.max_frames >= 0, "--max-frames must not be negative");
   CheckOption(args.run.detect_every >= 1, "--detect-every must be at least 1");
   if (args.method.config.empty()) throw Error("slam needs --config (a camera preset, see config/)");
+  CheckOption(!args.run.source.dataset.empty() || !args.run.source.bag.empty() ||
+                  args.run.source.live.has_value(),
+              "slam needs --dataset, --bag or --live");
+  CheckOption(args.run.source.replay_rate >= 0.0, "--replay-rate must not be negative");
   args.run.config = args.method.config;
   args.run.method = args.method.method;
   args.run.detector_model = args.method.detector_model;
@@ -104,9 +116,10 @@ void RunSlam(SlamArguments args) {
 void AddSlamCommand(CLI::App& app) {
   auto args = std::make_shared<SlamArguments>();
   CLI::App* command = app.add_subcommand(
-      "slam", "RGB-D SLAM on a TUM or OpenLORIS sequence; TUM trajectory, timings, ATE/RPE");
-  command->add_option("-d,--dataset", args->run.dataset, "Sequence folder (TUM RGB-D or OpenLORIS)")
-      ->required();
+      "slam",
+      "RGB-D SLAM on a TUM or OpenLORIS sequence, a ROS bag or an OpenNI2 camera; TUM "
+      "trajectory, timings, ATE/RPE");
+  AddSourceFlags(*command, args->source);
   AddMethodFlags(*command, args->method);
   command->add_option("-o,--out", args->out, "Output folder")->required();
   command->add_flag("--force", args->force, "Write into a non-empty output folder");
@@ -161,7 +174,10 @@ void AddSlamCommand(CLI::App& app) {
   command->add_option("--save-map", args->run.save_map,
                       "Write the map into this file at the end of the run (docs/slam.md, Saving "
                       "and reusing a map)");
-  command->callback([args] { RunSlam(*args); });
+  command->callback([args, command] {
+    args->run.source = args->source.Options(*command);
+    RunSlam(*args);
+  });
 }
 
 }  // namespace noctua::app

@@ -79,7 +79,7 @@ py::dict RunSlamOnSequence(const std::string& dataset, const std::string& config
                            const py::object& video, const py::object& map_ply,
                            const py::object& load_map, bool localize, const py::object& save_map) {
   eval::SlamRunOptions options;
-  options.dataset = dataset;
+  options.source.dataset = dataset;
   options.config = config;
   options.method = method;
   options.detector_model = PathArgument(detector).string();

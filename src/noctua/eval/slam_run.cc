@@ -3,11 +3,11 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <memory>
 
 #include "noctua/eval/trajectory_plot.h"
 #include "noctua/eval/trajectory_report.h"
-#include "noctua/io/image_file.h"
 #include "noctua/io/output_dir.h"
 #include "noctua/pipeline/method.h"
 #include "noctua/pipeline/method_config.h"
@@ -26,7 +26,9 @@ nlohmann::json RunJson(const SlamRunOptions& options, const SlamRunReport& repor
                        const pipeline::FeatureMethod& method) {
   const slam::SequenceRun& run = report.run;
   nlohmann::json json;
-  json["dataset"] = options.dataset.string();
+  json["source"] = report.source;
+  if (!options.source.dataset.empty()) json["dataset"] = options.source.dataset.string();
+  if (!options.source.bag.empty()) json["bag"] = options.source.bag.string();
   json["config"] = options.config.string();
   json["method"] = options.method;
   json["brightness"] = options.brightness;
@@ -42,6 +44,14 @@ nlohmann::json RunJson(const SlamRunOptions& options, const SlamRunReport& repor
   json["keyframes"] = run.keyframes;
   json["map_points"] = run.map_points;
   json["interrupted"] = run.interrupted;
+  // Real time: the frames the source skipped while the SLAM was busy; frames + dropped_frames
+  // is what the source delivered.
+  json["replay_rate"] = options.source.replay_rate;
+  json["dropped_frames"] = run.dropped_frames.size();
+  json["dropped_frame_indices"] = nlohmann::json::array();
+  for (const io::DroppedFrame& dropped : run.dropped_frames) {
+    json["dropped_frame_indices"].push_back(dropped.index);
+  }
   json["wall_s"] = run.wall_s;
   json["frames_per_second"] = run.FramesPerSecond();
   json["overlap_extraction"] = !options.sequential;
@@ -79,11 +89,12 @@ std::string CountsMarkdown(const SlamRunReport& report, bool sequential) {
   char counts[320];
   std::snprintf(
       counts, sizeof(counts),
-      "\nframes %zu, with a pose %zu (coasting %zu), lost %zu, keyframes %d, map points %d, "
-      "peak RSS %.1f MB\n"
+      "\nframes %zu, with a pose %zu (coasting %zu), lost %zu, dropped %zu, keyframes %d, "
+      "map points %d, peak RSS %.1f MB\n"
       "%.1f frames/s (%.2f s for the run, loading included, %s)\n",
       run.frames.size(), run.trajectory.size(), run.coasted_frames.size(), run.lost_frames.size(),
-      run.keyframes, run.map_points, PeakResidentMemoryMb(), run.FramesPerSecond(), run.wall_s,
+      run.dropped_frames.size(), run.keyframes, run.map_points, PeakResidentMemoryMb(),
+      run.FramesPerSecond(), run.wall_s,
       sequential ? "sequential" : "extraction overlapped with tracking");
   return counts;
 }
@@ -157,6 +168,14 @@ pipeline::MethodConfig RunMethodConfig(const SlamRunOptions& options) {
   return config;
 }
 
+io::FrameSourceOptions SourceOptions(const SlamRunOptions& options, const slam::SlamSetup& setup) {
+  io::FrameSourceOptions source = options.source;
+  source.depth_factor = setup.camera.depth_factor;
+  source.ground_truth_convention = setup.camera.ground_truth;
+  source.max_frames = options.max_frames;
+  return source;
+}
+
 }  // namespace
 
 SlamRunner::SlamRunner(const SlamRunOptions& options)
@@ -164,8 +183,7 @@ SlamRunner::SlamRunner(const SlamRunOptions& options)
       setup_(CheckedSetup(options)),
       config_(RunMethodConfig(options)),
       method_(pipeline::CreateMethod(options.method, config_)),
-      sequence_(io::Sequence::Open(options.dataset,
-                                   {.ground_truth_convention = setup_.camera.ground_truth})) {
+      source_(io::OpenFrameSource(SourceOptions(options, setup_))) {
   if (!options_.load_map.empty()) {
     loaded_map_ = slam::LoadMap(options_.load_map, RunMapIdentity());
     loaded_keyframes_ = loaded_map_->NumKeyFrames();
@@ -177,7 +195,7 @@ SlamRunner::SlamRunner(const SlamRunOptions& options)
   }
   if (!options_.viewer.any()) return;
   viewer_ = std::make_unique<viz::Viewer>(options_.viewer, setup_.camera.Camera().size(),
-                                          sequence_.ground_truth());
+                                          source_->ground_truth());
   method_->used_masks()->Keep();
 }
 
@@ -206,7 +224,6 @@ nlohmann::json SlamRunner::MapJson(const slam::SequenceRun& run) const {
 SlamRunReport SlamRunner::Run(const SlamProgress& progress, const std::function<bool()>& stop) {
   SlamRunReport report;
   slam::RunOptions run_options;
-  run_options.max_frames = options_.max_frames;
   run_options.overlap_extraction = !options_.sequential;
   if (const auto masks = method_->detection_ahead()) {
     run_options.lookahead = [masks](const cv::Mat& image, const cv::Mat& depth_m) {
@@ -219,9 +236,15 @@ SlamRunReport SlamRunner::Run(const SlamProgress& progress, const std::function<
     if (progress) progress(index, count, outcome, report.rss_mb.back());
   };
   if (options_.brightness < 1.0) {
-    run_options.transform_image =
-        sim::SequenceDarkener(io::ReadImage8U(sequence_.frame(0).rgb_path), options_.brightness,
-                              sim::SensorModelByName(options_.sensor), options_.seed);
+    // Darkened relative to the first frame, which only the source's first frame can give.
+    run_options.transform_image = [this, darken = sim::FrameTransform()](
+                                      int index, const cv::Mat& image) mutable {
+      if (!darken) {
+        darken = sim::SequenceDarkener(image, options_.brightness,
+                                       sim::SensorModelByName(options_.sensor), options_.seed);
+      }
+      return darken(index, image);
+    };
   }
   run_options.stop = stop;
   if (viewer_ != nullptr) {
@@ -236,12 +259,14 @@ SlamRunReport SlamRunner::Run(const SlamProgress& progress, const std::function<
     slam.UseMap(std::move(*loaded_map_), options_.localize);
     loaded_map_.reset();
   }
-  report.run = slam::RunSequence(slam, sequence_, setup_.camera.depth_factor, run_options);
+  report.run = slam::RunFrames(slam, *source_, run_options);
   // Saved even after Ctrl-C: the map is whole after every frame.
   if (!options_.save_map.empty()) {
     slam::SaveMap(slam.tracker().map(), RunMapIdentity(), options_.save_map);
   }
-  report.sequence_frames = sequence_.size();
+  report.source = source_->Describe();
+  report.sequence_frames =
+      source_->size().value_or(report.run.frames.size() + report.run.dropped_frames.size());
   if (viewer_ != nullptr) {
     viewer_->Finish();
     report.stopped_in_viewer = viewer_->stop_requested();
@@ -252,7 +277,7 @@ SlamRunReport SlamRunner::Run(const SlamProgress& progress, const std::function<
   report.markdown =
       TimingMarkdown(SummarizeStages(report.run.frames, SlamReportStages()), report.json) +
       CountsMarkdown(report, options_.sequential) + MapMarkdown(report.json["map"]);
-  AddTrajectoryErrors(sequence_.ground_truth(), report);
+  AddTrajectoryErrors(source_->ground_truth(), report);
   return report;
 }
 
@@ -272,6 +297,38 @@ void WriteSlamReport(const SlamRunReport& report, const std::filesystem::path& o
   if (report.rpe) PlotRpe(*report.rpe, out, "rpe");
 }
 
+namespace {
+
+std::string FrameRow(std::size_t i, const slam::FrameOutcome& f,
+                     const std::vector<std::string>& stages, double rss_mb) {
+  // A frame without a pose has no confidence: its sigma columns stay empty.
+  char sigma[64] = ",";
+  if (std::isfinite(f.position_sigma_m)) {
+    std::snprintf(sigma, sizeof(sigma), "%.2f,%.3f", 1000.0 * f.position_sigma_m,
+                  f.rotation_sigma_deg);
+  }
+  char buffer[192];
+  std::snprintf(buffer, sizeof(buffer), "%zu,%.6f,%s,%s,%d,%d,%d,%s,%d,%d,%d,%.1f", i, f.timestamp,
+                TrackingStateName(f.state), f.method.c_str(), f.keypoints, f.inliers,
+                f.moving_keypoints, sigma, f.new_keyframe ? 1 : 0, f.keyframes, f.map_points,
+                rss_mb);
+  std::string row = buffer;
+  for (const auto& stage : stages) {
+    const auto found = f.stage_ms.find(stage);
+    std::snprintf(buffer, sizeof(buffer), ",%.3f", found == f.stage_ms.end() ? 0.0 : found->second);
+    row += buffer;
+  }
+  return row + "\n";
+}
+
+std::string DroppedRow(const io::DroppedFrame& dropped, std::size_t columns) {
+  char buffer[64];
+  std::snprintf(buffer, sizeof(buffer), "%d,%.6f,dropped", dropped.index, dropped.timestamp);
+  return buffer + std::string(columns - 3, ',') + "\n";
+}
+
+}  // namespace
+
 std::string FramesCsv(const slam::SequenceRun& run, const std::vector<std::string>& stages,
                       const std::vector<double>& rss_mb) {
   std::string csv =
@@ -279,28 +336,22 @@ std::string FramesCsv(const slam::SequenceRun& run, const std::vector<std::strin
       "rotation_sigma_deg,keyframe,keyframes,map_points,rss_mb";
   for (const auto& stage : stages) csv.append(",").append(stage).append("_ms");
   csv += "\n";
-  char buffer[192];
+  const std::size_t columns = 13 + stages.size();
+  std::size_t next_dropped = 0;
+  const auto dropped_before = [&](int index) {
+    for (;
+         next_dropped < run.dropped_frames.size() && run.dropped_frames[next_dropped].index < index;
+         ++next_dropped) {
+      csv += DroppedRow(run.dropped_frames[next_dropped], columns);
+    }
+  };
   for (std::size_t i = 0; i < run.frames.size(); ++i) {
     const slam::FrameOutcome& f = run.frames[i];
-    // A frame without a pose has no confidence: its sigma columns stay empty.
-    char sigma[64] = ",";
-    if (std::isfinite(f.position_sigma_m)) {
-      std::snprintf(sigma, sizeof(sigma), "%.2f,%.3f", 1000.0 * f.position_sigma_m,
-                    f.rotation_sigma_deg);
-    }
-    std::snprintf(buffer, sizeof(buffer), "%zu,%.6f,%s,%s,%d,%d,%d,%s,%d,%d,%d,%.1f", i,
-                  f.timestamp, TrackingStateName(f.state), f.method.c_str(), f.keypoints, f.inliers,
-                  f.moving_keypoints, sigma, f.new_keyframe ? 1 : 0, f.keyframes, f.map_points,
-                  i < rss_mb.size() ? rss_mb[i] : 0.0);
-    csv += buffer;
-    for (const auto& stage : stages) {
-      const auto found = f.stage_ms.find(stage);
-      std::snprintf(buffer, sizeof(buffer), ",%.3f",
-                    found == f.stage_ms.end() ? 0.0 : found->second);
-      csv += buffer;
-    }
-    csv += "\n";
+    dropped_before(f.index);
+    csv +=
+        FrameRow(static_cast<std::size_t>(f.index), f, stages, i < rss_mb.size() ? rss_mb[i] : 0.0);
   }
+  dropped_before(std::numeric_limits<int>::max());
   return csv;
 }
 

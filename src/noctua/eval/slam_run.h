@@ -11,6 +11,7 @@
 
 #include "noctua/dynamic/async_masks.h"
 #include "noctua/eval/trajectory_error.h"
+#include "noctua/io/frame_source.h"
 #include "noctua/pipeline/method.h"
 #include "noctua/slam/map_io.h"
 #include "noctua/slam/rgbd_slam.h"
@@ -20,8 +21,11 @@ namespace noctua::eval {
 
 // A SLAM run over a sequence as `noctua slam` and Python's noctua.run_slam make it.
 struct SlamRunOptions {
-  std::filesystem::path dataset;  // TUM RGB-D or OpenLORIS folder
-  std::filesystem::path config;   // settings file: camera, SLAM and extractor (required)
+  // Where the frames come from: `source.dataset` (a TUM RGB-D or OpenLORIS folder), a ROS1 bag
+  // or an OpenNI2 camera, optionally in real time (io::FrameSourceOptions). Its depth factor,
+  // ground-truth convention and frame limit come from the settings and max_frames below.
+  io::FrameSourceOptions source;
+  std::filesystem::path config;  // settings file: camera, SLAM and extractor (required)
   std::string method = "paper";
   std::string detector_model;  // "" = the settings file's model, if any
   int max_frames = 0;          // 0: all
@@ -57,9 +61,10 @@ using SlamProgress =
 // A finished run with its report.
 struct SlamRunReport {
   slam::SequenceRun run;
-  std::vector<double> rss_mb;  // resident memory after each frame
-  std::size_t sequence_frames = 0;
-  std::optional<AteResult> ate;  // with ground truth and at least 3 poses
+  std::vector<double> rss_mb;       // resident memory after each frame
+  std::size_t sequence_frames = 0;  // what the source holds (a camera: what it delivered)
+  std::string source;               // io::FrameSource::Describe()
+  std::optional<AteResult> ate;     // with ground truth and at least 3 poses
   std::optional<RpeResult> rpe;
   bool stopped_in_viewer = false;  // the run ended because the user closed the viewer (q, Esc)
   int video_frames = 0;            // panels written to SlamRunOptions::viewer.video
@@ -79,6 +84,7 @@ class SlamRunner {
 
   // `stop` is checked before every frame (e.g. Ctrl-C), as is the viewer's window: the run then
   // ends there and the report covers the frames done. The viewer's files are written at the end.
+  // A runner runs once: its source's frames are then read.
   SlamRunReport Run(const SlamProgress& progress = {}, const std::function<bool()>& stop = {});
 
  private:
@@ -86,7 +92,7 @@ class SlamRunner {
   slam::SlamSetup setup_;
   pipeline::MethodConfig config_;
   std::unique_ptr<pipeline::FeatureMethod> method_;
-  io::Sequence sequence_;
+  std::unique_ptr<io::FrameSource> source_;
   std::unique_ptr<viz::Viewer> viewer_;  // with SlamRunOptions::viewer.any()
   std::optional<slam::Map> loaded_map_;  // read (and checked) before the run starts
   int loaded_keyframes_ = 0;
@@ -104,7 +110,8 @@ SlamRunReport RunSlam(const SlamRunOptions& options, const SlamProgress& progres
 // ATE/RPE plots into `out` (which must exist).
 void WriteSlamReport(const SlamRunReport& report, const std::filesystem::path& out);
 
-// frames.csv: one row per frame (state, counts, confidence, map size, memory, stage times).
+// frames.csv: one row per frame (state, counts, confidence, map size, memory, stage times); a
+// frame a real-time source dropped has its row too, state "dropped", the other columns empty.
 std::string FramesCsv(const slam::SequenceRun& run, const std::vector<std::string>& stages,
                       const std::vector<double>& rss_mb);
 

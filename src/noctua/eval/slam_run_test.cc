@@ -31,12 +31,32 @@ TEST(FramesCsvTest, OneRowPerFrameWithEmptySigmaWithoutPose) {
   slam::SequenceRun run;
   run.frames = {Outcome(slam::TrackingState::kOk, 2.0, 10.0),
                 Outcome(slam::TrackingState::kLost, 3.0, 0.0)};
+  run.frames[1].index = 1;
   const std::string csv = FramesCsv(run, {"track", "mapping"}, {120.0});
   EXPECT_EQ(csv,
             "frame,timestamp,state,method,keypoints,inliers,moving_keypoints,position_sigma_mm,"
             "rotation_sigma_deg,keyframe,keyframes,map_points,rss_mb,track_ms,mapping_ms\n"
             "0,1.500000,ok,motion,1000,250,0,4.20,0.125,1,3,700,120.0,2.000,10.000\n"
             "1,1.500000,lost,,1000,250,0,,,0,3,700,0.0,3.000,0.000\n");
+}
+
+// A real-time run: the frames the source dropped get rows of their own, in frame order, so that
+// the file lists every frame the source delivered.
+TEST(FramesCsvTest, DroppedFramesHaveARowInFrameOrder) {
+  slam::SequenceRun run;
+  run.frames = {Outcome(slam::TrackingState::kOk, 2.0, 0.0),
+                Outcome(slam::TrackingState::kOk, 2.0, 0.0)};
+  run.frames[1].index = 3;
+  run.dropped_frames = {{1, 1.25}, {2, 1.5}, {4, 2.0}};
+  const std::string csv = FramesCsv(run, {"track"}, {});
+  EXPECT_EQ(csv,
+            "frame,timestamp,state,method,keypoints,inliers,moving_keypoints,position_sigma_mm,"
+            "rotation_sigma_deg,keyframe,keyframes,map_points,rss_mb,track_ms\n"
+            "0,1.500000,ok,motion,1000,250,0,4.20,0.125,0,3,700,0.0,2.000\n"
+            "1,1.250000,dropped,,,,,,,,,,,\n"
+            "2,1.500000,dropped,,,,,,,,,,,\n"
+            "3,1.500000,ok,motion,1000,250,0,4.20,0.125,0,3,700,0.0,2.000\n"
+            "4,2.000000,dropped,,,,,,,,,,,\n");
 }
 
 TEST(SummarizeStagesTest, MedianMeanAndMaxOverTheFramesThatHaveTheStage) {

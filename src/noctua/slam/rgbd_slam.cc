@@ -4,6 +4,7 @@
 #include <condition_variable>
 #include <deque>
 #include <exception>
+#include <limits>
 #include <mutex>
 #include <optional>
 #include <thread>
@@ -84,11 +85,13 @@ struct LoadedFrame {
   io::FrameImages images;
   double timestamp = 0.0;
   double load_ms = 0.0;
+  int index = 0;  // in the source
 };
 
 struct PreparedFrame {
   RgbdSlam::Extracted extracted;
   double load_ms = 0.0;
+  int index = 0;
   cv::Mat bgr;  // kept for RunOptions::observe only
 };
 
@@ -99,15 +102,15 @@ std::optional<geometry::Pose> LastPose(const Tracker& tracker) {
   return record.pose_c_r * record.reference->pose_cw();
 }
 
-// Items 0..count-1 made in order on a thread of their own, up to `capacity` ahead of the one
-// the consumer takes, so that a slow item on either side (a keyframe's local BA, a frame whose
-// mask is late) is absorbed instead of stalling the other side.
+// Items made in order on a thread of their own until `make` has none left, up to `capacity`
+// ahead of the one the consumer takes, so that a slow item on either side (a keyframe's local
+// BA, a frame whose mask is late) is absorbed instead of stalling the other side.
 template <typename T>
 class OrderedProducer {
  public:
-  OrderedProducer(int count, int capacity, std::function<T(int)> make)
+  OrderedProducer(int capacity, std::function<std::optional<T>()> make)
       : capacity_(capacity), make_(std::move(make)) {
-    worker_ = std::thread([this, count] { Work(count); });
+    worker_ = std::thread([this] { Work(); });
   }
   ~OrderedProducer() {
     {
@@ -120,11 +123,14 @@ class OrderedProducer {
   OrderedProducer(const OrderedProducer&) = delete;
   OrderedProducer& operator=(const OrderedProducer&) = delete;
 
-  // The next item in order; rethrows what making it threw.
-  T Pop() {
+  // The next item in order, none after the last; rethrows what making it threw.
+  std::optional<T> Pop() {
     std::unique_lock lock(mutex_);
-    changed_.wait(lock, [this] { return !ready_.empty() || error_; });
-    if (ready_.empty()) std::rethrow_exception(error_);
+    changed_.wait(lock, [this] { return !ready_.empty() || error_ || done_; });
+    if (ready_.empty()) {
+      if (error_) std::rethrow_exception(error_);
+      return std::nullopt;
+    }
     T item = std::move(ready_.front());
     ready_.pop_front();
     lock.unlock();
@@ -133,65 +139,100 @@ class OrderedProducer {
   }
 
  private:
-  void Work(int count) {
-    for (int i = 0; i < count; ++i) {
+  void Work() {
+    for (;;) {
       {
         std::unique_lock lock(mutex_);
         changed_.wait(lock,
                       [this] { return stop_ || static_cast<int>(ready_.size()) < capacity_; });
         if (stop_) return;
       }
-      bool failed = false;
+      bool last = false;
       try {
-        T item = make_(i);
+        std::optional<T> item = make_();
         std::lock_guard lock(mutex_);
-        ready_.push_back(std::move(item));
+        if (item) {
+          ready_.push_back(std::move(*item));
+        } else {
+          done_ = last = true;
+        }
       } catch (...) {
         std::lock_guard lock(mutex_);
         error_ = std::current_exception();
-        failed = true;
+        last = true;
       }
       changed_.notify_all();
-      if (failed) return;
+      if (last) return;
     }
   }
 
   const int capacity_;
-  std::function<T(int)> make_;
+  std::function<std::optional<T>()> make_;
   std::mutex mutex_;
   std::condition_variable changed_;
   std::deque<T> ready_;
   std::exception_ptr error_;
+  bool done_ = false;
   bool stop_ = false;
   std::thread worker_;  // last: starts after everything it uses exists
 };
 
-}  // namespace
-
-SequenceRun RunSequence(const io::Sequence& sequence, double depth_factor,
-                        const geometry::PinholeCamera& camera, cv::Ptr<cv::Feature2D> extractor,
-                        const SlamOptions& options, const RunOptions& run_options) {
-  RgbdSlam slam(camera, std::move(extractor), options);
-  return RunSequence(slam, sequence, depth_factor, run_options);
-}
-
-SequenceRun RunSequence(RgbdSlam& slam, const io::Sequence& sequence, double depth_factor,
-                        const RunOptions& run_options) {
-  const int count = run_options.max_frames > 0
-                        ? std::min(run_options.max_frames, static_cast<int>(sequence.size()))
-                        : static_cast<int>(sequence.size());
+void CheckRunOptions(const RunOptions& run_options) {
   if (run_options.overlap_extraction && run_options.extraction_queue < 1) {
     throw Error("slam: extraction_queue must be at least 1");
   }
   if (run_options.lookahead && run_options.lookahead_frames < 1) {
     throw Error("slam: lookahead_frames must be at least 1");
   }
-  const auto load = [&](int i) {
+}
+
+FrameOutcome Outcome(const TrackResult& result, const PreparedFrame& prepared, double total_ms,
+                     const Map& map) {
+  FrameOutcome outcome;
+  outcome.index = prepared.index;
+  outcome.timestamp = prepared.extracted.timestamp;
+  outcome.state = result.state;
+  outcome.method = result.method;
+  outcome.inliers = result.inliers;
+  outcome.moving_keypoints = result.moving_keypoints;
+  outcome.position_sigma_m = result.position_sigma_m;
+  outcome.rotation_sigma_deg = result.rotation_sigma_deg;
+  outcome.new_keyframe = result.new_keyframe;
+  outcome.stage_ms = result.stage_ms;
+  outcome.stage_ms["load"] = prepared.load_ms;
+  outcome.stage_ms["total"] = total_ms;
+  outcome.keypoints = result.keypoints;
+  outcome.keyframes = map.NumKeyFrames();
+  outcome.map_points = map.NumMapPoints();
+  return outcome;
+}
+
+}  // namespace
+
+SequenceRun RunFrames(io::FrameSource& source, const geometry::PinholeCamera& camera,
+                      cv::Ptr<cv::Feature2D> extractor, const SlamOptions& options,
+                      const RunOptions& run_options) {
+  CheckRunOptions(run_options);
+  RgbdSlam slam(camera, std::move(extractor), options);
+  return RunFrames(slam, source, run_options);
+}
+
+SequenceRun RunFrames(RgbdSlam& slam, io::FrameSource& source, const RunOptions& run_options) {
+  CheckRunOptions(run_options);
+  const int limit =
+      run_options.max_frames > 0 ? run_options.max_frames : std::numeric_limits<int>::max();
+  const int count = source.size() ? std::min(limit, static_cast<int>(*source.size()))
+                                  : (run_options.max_frames > 0 ? limit : 0);
+  int loaded_count = 0;  // on the loading thread only
+  const auto load = [&]() -> std::optional<LoadedFrame> {
+    if (loaded_count >= limit) return std::nullopt;
     Stopwatch watch;
-    const io::Frame& frame = sequence.frame(static_cast<std::size_t>(i));
-    LoadedFrame loaded{sequence.Load(frame, depth_factor), frame.timestamp, 0.0};
+    std::optional<io::SourceFrame> frame = source.Next();
+    if (!frame) return std::nullopt;
+    ++loaded_count;
+    LoadedFrame loaded{std::move(frame->images), frame->timestamp, 0.0, frame->index};
     if (run_options.transform_image) {
-      loaded.images.bgr = run_options.transform_image(i, loaded.images.bgr);
+      loaded.images.bgr = run_options.transform_image(loaded.index, loaded.images.bgr);
     }
     loaded.load_ms = watch.ElapsedMs();
     if (run_options.lookahead) run_options.lookahead(loaded.images.bgr, loaded.images.depth_m);
@@ -200,6 +241,7 @@ SequenceRun RunSequence(RgbdSlam& slam, const io::Sequence& sequence, double dep
   const auto extract = [&](LoadedFrame loaded) {
     PreparedFrame prepared;
     prepared.load_ms = loaded.load_ms;
+    prepared.index = loaded.index;
     prepared.extracted = slam.Extract(loaded.images.bgr, loaded.images.depth_m, loaded.timestamp);
     if (run_options.observe) prepared.bgr = loaded.images.bgr;
     return prepared;
@@ -208,11 +250,17 @@ SequenceRun RunSequence(RgbdSlam& slam, const io::Sequence& sequence, double dep
   // One thread: frames loaded (and handed to the lookahead) up to load_ahead before their
   // extraction, in a plain queue.
   std::deque<LoadedFrame> ahead;
-  int next_to_load = 0;
-  const auto prepare_in_line = [&](int i) {
-    while (next_to_load < count && next_to_load <= i + load_ahead) {
-      ahead.push_back(load(next_to_load++));
+  bool source_ended = false;
+  const auto prepare_in_line = [&]() -> std::optional<PreparedFrame> {
+    while (!source_ended && static_cast<int>(ahead.size()) <= load_ahead) {
+      std::optional<LoadedFrame> loaded = load();
+      if (loaded) {
+        ahead.push_back(std::move(*loaded));
+      } else {
+        source_ended = true;
+      }
     }
+    if (ahead.empty()) return std::nullopt;
     LoadedFrame loaded = std::move(ahead.front());
     ahead.pop_front();
     return extract(std::move(loaded));
@@ -227,49 +275,39 @@ SequenceRun RunSequence(RgbdSlam& slam, const io::Sequence& sequence, double dep
   std::optional<OrderedProducer<LoadedFrame>> loader;
   std::optional<OrderedProducer<PreparedFrame>> extraction;
   if (run_options.overlap_extraction) {
-    loader.emplace(count, std::max(2, load_ahead), load);
-    extraction.emplace(count, run_options.extraction_queue,
-                       [&](int) { return extract(loader->Pop()); });
+    loader.emplace(std::max(2, load_ahead), load);
+    extraction.emplace(run_options.extraction_queue, [&]() -> std::optional<PreparedFrame> {
+      std::optional<LoadedFrame> loaded = loader->Pop();
+      if (!loaded) return std::nullopt;
+      return extract(std::move(*loaded));
+    });
   }
-  for (int i = 0; i < count; ++i) {
+  for (int i = 0;; ++i) {
     if (run_options.stop && run_options.stop()) {
       run.interrupted = true;
       break;
     }
     Stopwatch total;
-    PreparedFrame prepared = extraction ? extraction->Pop() : prepare_in_line(i);
-    const double timestamp = prepared.extracted.timestamp;
-    const std::shared_ptr<const FrameFeatures> features = prepared.extracted.features;
-    const TrackResult result = slam.Track(std::move(prepared.extracted));
-    FrameOutcome outcome;
-    outcome.timestamp = timestamp;
-    outcome.state = result.state;
-    outcome.method = result.method;
-    outcome.inliers = result.inliers;
-    outcome.moving_keypoints = result.moving_keypoints;
-    outcome.position_sigma_m = result.position_sigma_m;
-    outcome.rotation_sigma_deg = result.rotation_sigma_deg;
-    outcome.new_keyframe = result.new_keyframe;
-    outcome.stage_ms = result.stage_ms;
-    outcome.stage_ms["load"] = prepared.load_ms;
-    outcome.stage_ms["total"] = total.ElapsedMs();
-    outcome.keypoints = result.keypoints;
-    outcome.keyframes = slam.tracker().map().NumKeyFrames();
-    outcome.map_points = slam.tracker().map().NumMapPoints();
+    std::optional<PreparedFrame> prepared = extraction ? extraction->Pop() : prepare_in_line();
+    if (!prepared) break;
+    const std::shared_ptr<const FrameFeatures> features = prepared->extracted.features;
+    const TrackResult result = slam.Track(std::move(prepared->extracted));
+    run.frames.push_back(Outcome(result, *prepared, total.ElapsedMs(), slam.tracker().map()));
+    const int index = prepared->index;
     if (result.state != TrackingState::kNotInitialised) started = true;
-    if (started && result.state == TrackingState::kCoasting) run.coasted_frames.push_back(i);
+    if (started && result.state == TrackingState::kCoasting) run.coasted_frames.push_back(index);
     if (started &&
         (result.state == TrackingState::kLost || result.state == TrackingState::kNotInitialised)) {
-      run.lost_frames.push_back(i);
+      run.lost_frames.push_back(index);
     }
-    run.frames.push_back(outcome);
     if (run_options.observe) {
-      run_options.observe({i, prepared.bgr, features.get(), &result, &run.frames.back(),
+      run_options.observe({index, prepared->bgr, features.get(), &result, &run.frames.back(),
                            LastPose(slam.tracker()), &slam.tracker().map()});
     }
     if (run_options.progress) run_options.progress(i, count, run.frames.back());
   }
   run.wall_s = run_watch.ElapsedMs() / 1000.0;
+  run.dropped_frames = source.dropped();
   run.trajectory = slam.Trajectory();
   run.keyframes = slam.tracker().map().NumKeyFrames();
   run.map_points = slam.tracker().map().NumMapPoints();
@@ -277,6 +315,19 @@ SequenceRun RunSequence(RgbdSlam& slam, const io::Sequence& sequence, double dep
   run.map_points_created = slam.tracker().map().NumMapPointsCreated();
   run.map_points_allocated = slam.tracker().map().NumMapPointsAllocated();
   return run;
+}
+
+SequenceRun RunSequence(const io::Sequence& sequence, double depth_factor,
+                        const geometry::PinholeCamera& camera, cv::Ptr<cv::Feature2D> extractor,
+                        const SlamOptions& options, const RunOptions& run_options) {
+  io::FolderSource source(sequence, depth_factor);
+  return RunFrames(source, camera, std::move(extractor), options, run_options);
+}
+
+SequenceRun RunSequence(RgbdSlam& slam, const io::Sequence& sequence, double depth_factor,
+                        const RunOptions& run_options) {
+  io::FolderSource source(sequence, depth_factor);
+  return RunFrames(slam, source, run_options);
 }
 
 }  // namespace noctua::slam

@@ -10,6 +10,7 @@
 
 #include "noctua/geometry/camera.h"
 #include "noctua/io/dataset.h"
+#include "noctua/io/frame_source.h"
 #include "noctua/io/trajectory.h"
 #include "noctua/slam/slam_options.h"
 #include "noctua/slam/tracking.h"
@@ -64,6 +65,7 @@ class RgbdSlam {
 
 // One frame of a run over a sequence.
 struct FrameOutcome {
+  int index = 0;  // in the source (frames a real-time source dropped are counted)
   double timestamp = 0.0;
   TrackingState state = TrackingState::kNotInitialised;
   std::string method;
@@ -82,8 +84,9 @@ struct FrameOutcome {
 
 struct SequenceRun {
   std::vector<FrameOutcome> frames;
-  io::Trajectory trajectory;     // tracked frames, T_world_camera
-  std::vector<int> lost_frames;  // indices of frames without a pose after the map was started
+  io::Trajectory trajectory;  // tracked frames, T_world_camera
+  std::vector<int>
+      lost_frames;  // source indices of frames without a pose after the map was started
   // Indices of frames not tracked but given the motion model's pose (TrackingState::kCoasting):
   // they are in the trajectory, with their confidence in `frames`.
   std::vector<int> coasted_frames;
@@ -94,6 +97,9 @@ struct SequenceRun {
   int keyframes_created = 0;
   long map_points_created = 0;
   int map_points_allocated = 0;
+  // Frames a real-time source skipped while the SLAM was busy (none from a recording read as
+  // fast as the SLAM goes): frames + dropped_frames are all the source delivered.
+  std::vector<io::DroppedFrame> dropped_frames;
   bool interrupted = false;  // RunOptions::stop ended the run before the last frame
   double wall_s = 0.0;       // whole run, loading included
   double FramesPerSecond() const {
@@ -117,7 +123,8 @@ struct FrameView {
 
 struct RunOptions {
   int max_frames = 0;  // 0: all
-  // Called after every frame (index, count, outcome), e.g. for a progress bar.
+  // Called after every frame (position in the run, frame count or 0 when not known, outcome),
+  // e.g. for a progress bar.
   std::function<void(int, int, const FrameOutcome&)> progress;
   // Called after every frame, before `progress`, with what a viewer draws (viz/viewer.h).
   std::function<void(const FrameView&)> observe;
@@ -143,7 +150,18 @@ struct RunOptions {
   int lookahead_frames = 3;
 };
 
+// Runs the SLAM over the frames of a source until it has none left (or max_frames, or stop).
+// With a real-time source, the SLAM takes frames from it as fast as it can; the extraction
+// queue and lookahead then decide how many frames are in the pipeline at once.
+SequenceRun RunFrames(io::FrameSource& source, const geometry::PinholeCamera& camera,
+                      cv::Ptr<cv::Feature2D> extractor, const SlamOptions& options,
+                      const RunOptions& run_options = RunOptions());
+
 // Runs the SLAM over a sequence with the given depth factor (DepthMapFactor).
+// The same with a SLAM the caller made (e.g. one that starts from a loaded map).
+SequenceRun RunFrames(RgbdSlam& slam, io::FrameSource& source,
+                      const RunOptions& run_options = RunOptions());
+
 SequenceRun RunSequence(const io::Sequence& sequence, double depth_factor,
                         const geometry::PinholeCamera& camera, cv::Ptr<cv::Feature2D> extractor,
                         const SlamOptions& options, const RunOptions& run_options = RunOptions());

@@ -1,0 +1,90 @@
+#pragma once
+
+#include <cstddef>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "noctua/io/dataset.h"
+#include "noctua/io/ground_truth.h"
+#include "noctua/io/trajectory.h"
+
+namespace noctua::io {
+
+// A frame as a source delivers it.
+struct SourceFrame {
+  int index = 0;           // position in the source (recording order, dropped frames counted)
+  double timestamp = 0.0;  // time of the colour image, seconds
+  FrameImages images;      // 8-bit BGR and depth in metres (CV_32F, 0 = none)
+};
+
+// A frame a real-time source skipped because its reader had not taken the previous one yet.
+struct DroppedFrame {
+  int index = 0;
+  double timestamp = 0.0;
+};
+
+// Where the SLAM's frames come from, in time order: a dataset folder, a ROS bag, a camera, or
+// one of these played at its recording's rate. One reader at a time.
+class FrameSource {
+ public:
+  virtual ~FrameSource() = default;
+
+  // For reports and messages, e.g. "bag run.bag".
+  virtual std::string Describe() const = 0;
+  // The number of frames, when known before reading them (not for a camera).
+  virtual std::optional<std::size_t> size() const = 0;
+  // The next frame; none after the last. Blocks until a real-time source has one. Throws
+  // noctua::Error naming the file (or device) and the problem.
+  virtual std::optional<SourceFrame> Next() = 0;
+  // T_world_camera; empty without ground truth.
+  virtual const Trajectory& ground_truth() const;
+  // The frames skipped so far (real-time sources only), in order.
+  virtual std::vector<DroppedFrame> dropped() const { return {}; }
+};
+
+// The frames of a dataset folder (io::Sequence), its first `max_frames` (0: all), 16-bit depth
+// read with `depth_factor`.
+class FolderSource : public FrameSource {
+ public:
+  FolderSource(Sequence sequence, double depth_factor, int max_frames = 0);
+
+  std::string Describe() const override;
+  std::optional<std::size_t> size() const override { return count_; }
+  std::optional<SourceFrame> Next() override;
+  const Trajectory& ground_truth() const override { return sequence_.ground_truth(); }
+  const Sequence& sequence() const { return sequence_; }
+
+ private:
+  Sequence sequence_;
+  double depth_factor_;
+  std::size_t count_;
+  std::size_t next_ = 0;
+};
+
+// Where `noctua slam` reads: exactly one of a folder, a bag or a camera.
+struct FrameSourceOptions {
+  std::filesystem::path dataset;    // TUM RGB-D or OpenLORIS folder
+  std::filesystem::path bag;        // ROS1 bag (io/ros_bag.h)
+  std::optional<std::string> live;  // OpenNI2 device URI ("": the first one found)
+  std::string rgb_topic = "/camera/rgb/image_color";  // the bag's topics (TUM's names)
+  std::string depth_topic = "/camera/depth/image";
+  std::filesystem::path ground_truth;  // TUM-format file (a folder has its groundtruth.txt)
+  GroundTruthConvention ground_truth_convention = GroundTruthConvention::kCamera;
+  double depth_factor = 5000.0;  // the folder's 16-bit depth per metre (DepthMapFactor)
+  int max_frames = 0;            // 0: all
+  // > 0: frames arrive at this multiple of the recording's rate, and those that arrive while
+  // the previous one waits are dropped (RealTimeSource). A camera is always real time.
+  double replay_rate = 0.0;
+
+  // Throws noctua::Error naming the first invalid field.
+  void Check() const;
+};
+
+// Opens the source the options name. Throws noctua::Error for anything unreadable (naming the
+// file), and for a camera that is not there.
+std::unique_ptr<FrameSource> OpenFrameSource(const FrameSourceOptions& options);
+
+}  // namespace noctua::io

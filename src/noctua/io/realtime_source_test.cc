@@ -1,0 +1,101 @@
+#include "noctua/io/realtime_source.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <thread>
+
+#include "noctua/io/openni_camera.h"
+#include "noctua/util/error.h"
+
+namespace noctua::io {
+namespace {
+
+using ::testing::HasSubstr;
+
+// `count` tiny frames 1/30 s apart, made on demand.
+class GeneratedSource : public FrameSource {
+ public:
+  explicit GeneratedSource(int count) : count_(count) {}
+  std::string Describe() const override { return "generated"; }
+  std::optional<std::size_t> size() const override { return count_; }
+  std::optional<SourceFrame> Next() override {
+    if (next_ >= count_) return std::nullopt;
+    SourceFrame frame;
+    frame.index = next_;
+    frame.timestamp = 100.0 + next_ / 30.0;
+    frame.images.bgr = cv::Mat(2, 2, CV_8UC3, cv::Scalar::all(next_));
+    frame.images.depth_m = cv::Mat(2, 2, CV_32F, cv::Scalar(1.0));
+    ++next_;
+    return frame;
+  }
+
+ private:
+  int count_;
+  int next_ = 0;
+};
+
+TEST(LatestFrameSlotTest, KeepsTheNewestAndRecordsTheFramesItReplaced) {
+  LatestFrameSlot slot;
+  GeneratedSource frames(4);
+  for (int i = 0; i < 3; ++i) slot.Put(*frames.Next());
+  EXPECT_EQ(slot.Take()->index, 2);
+  slot.Put(*frames.Next());
+  slot.Close();
+  EXPECT_EQ(slot.Take()->index, 3);
+  EXPECT_FALSE(slot.Take().has_value());
+  const std::vector<DroppedFrame> dropped = slot.dropped();
+  ASSERT_EQ(dropped.size(), 2U);
+  EXPECT_EQ(dropped[0].index, 0);
+  EXPECT_EQ(dropped[1].index, 1);
+  EXPECT_DOUBLE_EQ(dropped[1].timestamp, 100.0 + 1 / 30.0);
+}
+
+TEST(LatestFrameSlotTest, HandsOnTheProducersErrorAfterItsFrames) {
+  LatestFrameSlot slot;
+  GeneratedSource frames(1);
+  slot.Put(*frames.Next());
+  slot.Close(std::make_exception_ptr(Error("camera gone")));
+  EXPECT_TRUE(slot.Take().has_value());
+  EXPECT_THROW(slot.Take(), Error);
+}
+
+// A reader that takes every frame at once misses none; one that never reads until the end gets
+// the last frame only. Either way, taken + dropped is every frame, in order.
+TEST(RealTimeSourceTest, EveryFrameIsEitherTakenOrDropped) {
+  RealTimeSource fast_reader(std::make_unique<GeneratedSource>(10), 30.0);
+  int taken = 0;
+  while (fast_reader.Next()) ++taken;
+  EXPECT_EQ(taken + static_cast<int>(fast_reader.dropped().size()), 10);
+
+  RealTimeSource late_reader(std::make_unique<GeneratedSource>(10), 100.0);
+  // 10 frames at 100x 30 Hz arrive within 3 ms; the reader comes after all of them.
+  for (int wait = 0; wait < 1000 && late_reader.dropped().size() < 9; ++wait) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  const std::optional<SourceFrame> last = late_reader.Next();
+  ASSERT_TRUE(last.has_value());
+  EXPECT_EQ(last->index, 9);
+  EXPECT_FALSE(late_reader.Next().has_value());
+  const std::vector<DroppedFrame> dropped = late_reader.dropped();
+  ASSERT_EQ(dropped.size(), 9U);
+  for (int i = 0; i < 9; ++i) EXPECT_EQ(dropped[i].index, i);
+}
+
+TEST(RealTimeSourceTest, ARateThatIsNotPositiveIsRefused) {
+  EXPECT_THROW(RealTimeSource(std::make_unique<GeneratedSource>(1), 0.0), Error);
+}
+
+// There is no camera on a build machine: Open says so instead of failing later.
+TEST(OpenNiCameraTest, WithoutACameraOpenSaysThatNoneWasFound) {
+  try {
+    OpenNiCamera::Open();
+    GTEST_SKIP() << "an OpenNI2 camera is connected";
+  } catch (const Error& error) {
+    EXPECT_THAT(error.what(), HasSubstr("no OpenNI2 camera found"));
+  }
+}
+
+}  // namespace
+}  // namespace noctua::io
