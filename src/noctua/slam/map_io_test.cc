@@ -245,7 +245,7 @@ TEST_P(MapReuseRunTest, SavedMapLocalisesEveryFrameOfTheSameCut) {
   const auto dir = std::filesystem::path(::testing::TempDir()) / ("map_reuse_" + GetParam());
   std::filesystem::create_directories(dir);
   eval::SlamRunOptions options;
-  options.dataset = Fr1();
+  options.source.dataset = Fr1();
   options.config = Config();
   options.method = GetParam();
   options.max_frames = kFrames;
@@ -282,7 +282,7 @@ INSTANTIATE_TEST_SUITE_P(Methods, MapReuseRunTest, ::testing::Values("orb", "pap
 
 TEST(MapReuseOptionsTest, RefusesLocalizeWithoutAMapAndASaveIntoAMissingFolder) {
   eval::SlamRunOptions options;
-  options.dataset = Fr1();
+  options.source.dataset = Fr1();
   options.config = Config();
   options.localize = true;
   EXPECT_THROW(options.Check(), Error);

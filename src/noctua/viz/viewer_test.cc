@@ -19,7 +19,7 @@ namespace {
 TEST(ViewerTest, SlamRunWritesOnePanelPerFrameAndTheFinalMapAsPly) {
   const testing::ScratchDir scratch("viewer");
   eval::SlamRunOptions options;
-  options.dataset = noctua::testing::DataDir() / "tum_fr1_rpy_200";
+  options.source.dataset = noctua::testing::DataDir() / "tum_fr1_rpy_200";
   options.config = testing::ConfigPath();
   options.method = "orb";
   options.max_frames = 40;
