@@ -31,29 +31,85 @@ EvalSequence::EvalSequence(const fs::path& dir, const io::CameraConfig& camera)
     : sequence_(io::Sequence::Open(dir, {.ground_truth_convention = camera.ground_truth})),
       camera_(camera) {
   camera_.Check();
-  if (!sequence_.has_ground_truth()) {
+  if (!sequence_->has_ground_truth()) {
     ThrowFileError(dir,
                    "the sequence has no ground truth (groundtruth.txt): matches cannot be "
                    "judged");
   }
-  for (const auto& frame : sequence_.frames()) {
+  for (const auto& frame : sequence_->frames()) {
     if (frame.ground_truth) frames_.push_back(frame);
   }
   if (frames_.empty()) ThrowFileError(dir, "no frame lies within the ground truth's time span");
+  name_ = frames_.front().rgb_path.parent_path().parent_path().filename().string();
   has_masks_ = fs::is_directory(dir / "mask");
 }
 
+EvalSequence::EvalSequence(io::FrameSource& source, const io::CameraConfig& camera,
+                           std::string name, std::size_t max_frames)
+    : camera_(camera), name_(std::move(name)) {
+  camera_.Check();
+  const io::Trajectory& truth = source.ground_truth();
+  if (truth.empty()) {
+    throw Error(source.Describe() +
+                ": no ground truth (a TUM groundtruth file): matches cannot "
+                "be judged");
+  }
+  const double max_gap_s = io::SequenceOptions{}.max_ground_truth_gap_s;  // as a folder's frames
+  const cv::Size size = camera_.Camera().size();
+  while (max_frames == 0 || frames_.size() < max_frames) {
+    std::optional<io::SourceFrame> next = source.Next();
+    if (!next) break;
+    std::optional<geometry::Pose> pose = truth.Interpolate(next->timestamp, max_gap_s);
+    if (!pose) continue;
+    if (next->images.bgr.size() != size) {
+      throw Error(source.Describe() + ", frame " + std::to_string(next->index) + ": image size " +
+                  std::to_string(next->images.bgr.cols) + "x" +
+                  std::to_string(next->images.bgr.rows) + " differs from the camera's " +
+                  std::to_string(size.width) + "x" + std::to_string(size.height));
+    }
+    io::Frame frame;
+    frame.index = next->index;
+    frame.timestamp = next->timestamp;
+    frame.ground_truth = pose;
+    frames_.push_back(std::move(frame));
+    images_.push_back(std::move(next->images));
+  }
+  if (frames_.empty()) {
+    throw Error(source.Describe() + ": no frame lies within the ground truth's time span");
+  }
+}
+
 io::FrameImages EvalSequence::Load(std::size_t i) const {
-  io::FrameImages images = sequence_.Load(frames_.at(i), camera_.depth_factor);
+  if (!sequence_) return images_.at(i);
+  io::FrameImages images = sequence_->Load(frames_.at(i), camera_.depth_factor);
   if (images.bgr.size() != camera_.Camera().size()) {
     ThrowFileError(frames_[i].rgb_path, "image size differs from the camera's");
   }
   return images;
 }
 
+EvalSequence OpenEvalSequence(io::FrameSourceOptions source, const io::CameraConfig& camera,
+                              std::size_t max_frames) {
+  CheckOption(!source.live.has_value(),
+              "eval reads a recording (a folder or a bag), not a camera: a camera has no ground "
+              "truth to judge matches with");
+  CheckOption(source.replay_rate == 0.0, "eval reads every frame: replay_rate does not apply");
+  source.Check();
+  if (!source.dataset.empty()) return EvalSequence(source.dataset, camera);
+  if (source.ground_truth.empty()) {
+    ThrowFileError(source.bag,
+                   "eval needs the bag's ground truth (--groundtruth FILE, TUM format): matches "
+                   "are judged with it");
+  }
+  source.ground_truth_convention = camera.ground_truth;
+  source.max_frames = 0;  // max_frames counts the frames with ground truth, as for a folder
+  const std::unique_ptr<io::FrameSource> frames = io::OpenFrameSource(source);
+  return EvalSequence(*frames, camera, source.bag.filename().string(), max_frames);
+}
+
 cv::Mat EvalSequence::LoadDynamicMask(std::size_t i) const {
   if (!has_masks_) return {};
-  const fs::path path = sequence_.dir() / "mask" / frames_.at(i).rgb_path.filename();
+  const fs::path path = sequence_->dir() / "mask" / frames_.at(i).rgb_path.filename();
   cv::Mat mask = io::ReadImage8U(path);
   if (mask.channels() != 1 || mask.size() != camera_.Camera().size()) {
     ThrowFileError(path, "a dynamic mask must be a grey image of the frames' size");
@@ -115,7 +171,7 @@ FeatureEvalResult EvaluateFeatures(const EvalSequence& sequence,
           : pair_starts.size() / 2;
 
   FeatureEvalResult result;
-  result.dataset = sequence.frame(0).rgb_path.parent_path().parent_path().filename().string();
+  result.dataset = sequence.name();
   result.taus = options.taus;
   result.methods.resize(methods.size());
   std::vector<std::vector<Extracted>> extracted(methods.size(), std::vector<Extracted>(num_frames));

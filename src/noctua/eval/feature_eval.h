@@ -3,11 +3,13 @@
 #include <filesystem>
 #include <functional>
 #include <opencv2/core.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "noctua/io/camera_config.h"
 #include "noctua/io/dataset.h"
+#include "noctua/io/frame_source.h"
 #include "noctua/pipeline/method.h"
 
 namespace noctua::eval {
@@ -62,21 +64,39 @@ class EvalSequence {
   // Opens a TUM or OpenLORIS layout sequence. Throws noctua::Error naming the folder when it has
   // no ground truth.
   EvalSequence(const std::filesystem::path& dir, const io::CameraConfig& camera);
+  // Reads the frames of a source (e.g. a ROS bag, io::RosBagSource) that have a ground-truth
+  // pose (the source's ground_truth() interpolated at the colour image's time, as a folder's
+  // are), at most `max_frames` of them (0: all), into memory. `name` is the report's dataset
+  // name. A source has no dynamic masks. Throws noctua::Error naming the source when it has no
+  // ground truth, or no frame within it.
+  EvalSequence(io::FrameSource& source, const io::CameraConfig& camera, std::string name,
+               std::size_t max_frames = 0);
 
   std::size_t size() const { return frames_.size(); }
   const io::Frame& frame(std::size_t i) const { return frames_[i]; }
   const io::CameraConfig& camera() const { return camera_; }
+  // The folder's name, or the name given with the source.
+  const std::string& name() const { return name_; }
   bool has_dynamic_masks() const { return has_masks_; }
   io::FrameImages Load(std::size_t i) const;
   // Empty when the sequence has no masks.
   cv::Mat LoadDynamicMask(std::size_t i) const;
 
  private:
-  io::Sequence sequence_;
+  std::optional<io::Sequence> sequence_;  // a folder's; none for a source's frames
   io::CameraConfig camera_;
-  std::vector<io::Frame> frames_;  // those with a ground-truth pose
+  std::string name_;
+  std::vector<io::Frame> frames_;        // those with a ground-truth pose
+  std::vector<io::FrameImages> images_;  // a source's frames, read once
   bool has_masks_ = false;
 };
+
+// Opens the recording the options name (a folder or a bag, no camera and no real-time replay)
+// for the evaluation: a folder as EvalSequence(dir, camera), a bag's frames with its ground
+// truth file; the first `max_frames` frames with ground truth (0: all). Throws noctua::Error
+// naming the file and problem.
+EvalSequence OpenEvalSequence(io::FrameSourceOptions source, const io::CameraConfig& camera,
+                              std::size_t max_frames = 0);
 
 using Progress = std::function<void(const std::string& message)>;
 

@@ -6,6 +6,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "noctua/eval/eval_test_support.h"
+#include "noctua/io/ros_bag.h"
 #include "noctua/sim/plane_scene.h"
 #include "noctua/sim/sequence.h"
 #include "noctua/testing/shared_data.h"
@@ -92,6 +93,90 @@ TEST(EvalSequence, RefusesASequenceWithoutGroundTruth) {
                         dir);
   fs::remove(dir / "groundtruth.txt");
   EXPECT_THROW(EvalSequence(dir, Fr1Camera()), Error);
+  fs::remove_all(dir);
+}
+
+// A bag written from the folder's first frames evaluates exactly as the folder: the same frames
+// (times and ground truth), counts per frame, and matches, no-depth and correct matches per pair.
+TEST(EvaluateFeatures, ABagOfTheFolderFramesScoresAsTheFolder) {
+  const fs::path dir = FreshDir("bag");
+  const fs::path fr1 = noctua::testing::DataDir() / "tum_fr1_rpy_200";
+  const io::CameraConfig camera = Fr1Camera();
+  io::RosBagWriteOptions write;
+  write.max_frames = 40;
+  io::WriteRosBag(io::Sequence::Open(fr1), camera.depth_factor, dir / "fr1.bag", write);
+  io::FrameSourceOptions source;
+  source.bag = dir / "fr1.bag";
+  source.ground_truth = fr1 / "groundtruth.txt";
+  FeatureEvalOptions options;
+  options.gap = 10;
+  options.max_frames = 30;
+  const EvalSequence folder_sequence(fr1, camera);
+  const EvalSequence bag_sequence = OpenEvalSequence(source, camera, 30);
+  ASSERT_EQ(bag_sequence.size(), 30u);
+  EXPECT_EQ(bag_sequence.name(), "fr1.bag");
+  EXPECT_FALSE(bag_sequence.has_dynamic_masks());
+  for (std::size_t i = 0; i < bag_sequence.size(); ++i) {
+    EXPECT_NEAR(bag_sequence.frame(i).timestamp, folder_sequence.frame(i).timestamp, 1e-6) << i;
+    EXPECT_TRUE(
+        bag_sequence.frame(i).ground_truth->isApprox(*folder_sequence.frame(i).ground_truth, 1e-6))
+        << i;
+  }
+  auto methods = Methods({"orb-opencv", "paper"});
+  const FeatureEvalResult folder = EvaluateFeatures(folder_sequence, methods, options);
+  const FeatureEvalResult bag = EvaluateFeatures(bag_sequence, methods, options);
+  EXPECT_EQ(bag.dataset, "fr1.bag");
+  ASSERT_EQ(bag.methods.size(), folder.methods.size());
+  for (std::size_t m = 0; m < folder.methods.size(); ++m) {
+    const MethodScore& a = folder.methods[m];
+    const MethodScore& b = bag.methods[m];
+    ASSERT_EQ(b.counts.size(), 30u);
+    for (std::size_t f = 0; f < a.counts.size(); ++f) {
+      EXPECT_EQ(b.counts[f].count, a.counts[f].count) << a.method << " frame " << f;
+    }
+    ASSERT_EQ(b.pairs.size(), 20u);
+    int matches = 0;
+    for (std::size_t p = 0; p < a.pairs.size(); ++p) {
+      EXPECT_EQ(b.pairs[p].frame_j, a.pairs[p].frame_j);
+      EXPECT_EQ(b.pairs[p].matches, a.pairs[p].matches) << a.method << " pair " << p;
+      EXPECT_EQ(b.pairs[p].no_depth, a.pairs[p].no_depth) << a.method << " pair " << p;
+      EXPECT_EQ(b.pairs[p].correct, a.pairs[p].correct) << a.method << " pair " << p;
+      matches += a.pairs[p].matches;
+    }
+    EXPECT_GT(matches, 20 * 50) << a.method;  // real matching happened
+  }
+  fs::remove_all(dir);
+}
+
+// A bag is judged only with its ground truth file, and only from its topics; a camera has no
+// ground truth. Each refusal names the file and what is missing.
+TEST(OpenEvalSequence, RefusesABagWithoutGroundTruthOrTopicsAndACamera) {
+  const fs::path dir = FreshDir("bag_refused");
+  const fs::path fr1 = noctua::testing::DataDir() / "tum_fr1_rpy_200";
+  io::RosBagWriteOptions write;
+  write.max_frames = 3;
+  io::WriteRosBag(io::Sequence::Open(fr1), 5000.0, dir / "three.bag", write);
+  io::FrameSourceOptions source;
+  source.bag = dir / "three.bag";
+  const auto message = [&](const io::FrameSourceOptions& options) -> std::string {
+    try {
+      OpenEvalSequence(options, Fr1Camera());
+    } catch (const Error& error) {
+      return error.what();
+    }
+    return "no error";
+  };
+  const std::string no_truth = message(source);
+  EXPECT_NE(no_truth.find("three.bag"), std::string::npos) << no_truth;
+  EXPECT_NE(no_truth.find("ground truth"), std::string::npos) << no_truth;
+  source.ground_truth = fr1 / "groundtruth.txt";
+  source.depth_topic = "/camera/depth_registered/image_raw";
+  const std::string no_topic = message(source);
+  EXPECT_NE(no_topic.find("three.bag"), std::string::npos) << no_topic;
+  EXPECT_NE(no_topic.find("/camera/depth_registered/image_raw"), std::string::npos) << no_topic;
+  io::FrameSourceOptions camera;
+  camera.live = "";
+  EXPECT_NE(message(camera).find("not a camera"), std::string::npos);
   fs::remove_all(dir);
 }
 
