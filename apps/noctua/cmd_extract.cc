@@ -1,4 +1,5 @@
-// noctua extract: feature points on images, with overlays and a JSON summary.
+// noctua extract: feature points on images, a folder's or a bag's frames, with overlays and a
+// JSON summary (eval::ExtractToFolder).
 #include <spdlog/spdlog.h>
 
 #include <filesystem>
@@ -10,16 +11,17 @@
 #include "commands.h"
 #include "method_options.h"
 #include "noctua/eval/extraction_report.h"
-#include "noctua/features/keypoint_overlay.h"
 #include "noctua/io/image_file.h"
 #include "noctua/io/output_dir.h"
 #include "noctua/util/error.h"
+#include "source_flags.h"
 
 namespace noctua::app {
 namespace {
 
 struct ExtractFlags {
   std::vector<std::string> images;
+  SourceFlags source;
   MethodFlags method;
   std::string mask;
   std::string out = "noctua-extract";
@@ -33,55 +35,36 @@ cv::Mat ReadExclusionMask(const std::filesystem::path& path) {
   return mask != 0;
 }
 
-void RunExtract(const ExtractFlags& flags) {
+void RunExtract(const ExtractFlags& flags, const io::FrameSourceOptions& source_options) {
+  const bool from_source = !source_options.dataset.empty() || !source_options.bag.empty();
+  CheckOption(flags.images.empty() != !from_source,
+              "extract needs exactly one of: images, --dataset or --bag");
+  CheckOption(source_options.ground_truth.empty(),
+              "extract does not use --groundtruth (eval and slam do)");
+  CheckOption(source_options.max_frames >= 0, "--max-frames must not be negative");
   const pipeline::MethodConfig config = MethodConfigFromFlags(flags.method);
   auto method = pipeline::CreateMethod(flags.method.method, config);
-  const cv::Mat mask = flags.mask.empty() ? cv::Mat() : ReadExclusionMask(flags.mask);
-  const std::filesystem::path out_dir = flags.out;
-  io::PrepareOutputDir(out_dir, flags.force);
-
-  nlohmann::json summary;
-  summary["method"] = method->name();
-  summary["images"] = nlohmann::json::array();
-  bool reported_skips = false;
-  for (const auto& image_path : flags.images) {
-    const cv::Mat image = io::ReadImage8U(image_path);
-    if (!mask.empty() && mask.size() != image.size()) {
-      throw Error(flags.mask + ": mask is " + std::to_string(mask.cols) + "x" +
-                  std::to_string(mask.rows) + " but " + image_path + " is " +
-                  std::to_string(image.cols) + "x" + std::to_string(image.rows));
-    }
-    features::Extraction result;
-    try {
-      result = method->Run(image, mask);
-    } catch (const Error& error) {
-      throw Error(image_path + ": " + error.what());
-    }
-    if (!reported_skips && !result.stats.stages_skipped.empty()) {
-      for (const auto& skipped : result.stats.stages_skipped) {
-        spdlog::info("{}: stage skipped: {}", method->name(), skipped);
-      }
-      reported_skips = true;
-    }
-    const std::filesystem::path overlay_path =
-        out_dir /
-        (std::filesystem::path(image_path).stem().string() + "_" + method->name() + ".png");
-    const std::string caption = method->name() + ": " + std::to_string(result.keypoints.size()) +
-                                " points, " + cv::format("%.1f ms", result.stats.total_ms);
-    io::WriteImage(overlay_path, features::DrawKeypointsByLevel(image, result.keypoints, caption));
-
-    nlohmann::json entry = eval::StatsToJson(result.stats);
-    entry["image"] = image_path;
-    entry["keypoints"] = result.keypoints.size();
-    entry["overlay"] = overlay_path.filename().string();
-    summary["images"].push_back(entry);
-    std::cout << image_path << ": " << result.keypoints.size() << " points ("
-              << eval::StageCountsLine(result.stats) << "), "
-              << cv::format("%.1f ms", result.stats.total_ms) << "\n";
+  eval::ExtractionOutput output;
+  output.dir = flags.out;
+  output.mask = flags.mask.empty() ? cv::Mat() : ReadExclusionMask(flags.mask);
+  output.mask_name = flags.mask;
+  // A source is opened (and a bag's topics checked) before the output folder is made.
+  std::unique_ptr<io::FrameSource> source;
+  eval::NextExtractionImage next;
+  if (from_source) {
+    source = io::OpenFrameSource(source_options);
+    output.source = source->Describe();
+    next = eval::SourceImages(*source);
+  } else {
+    next = eval::ImageFiles({flags.images.begin(), flags.images.end()});
   }
-  io::WriteTextFileAtomically(out_dir / "summary.json", summary.dump(2) + "\n");
-  std::cout << "wrote " << flags.images.size() << " overlay(s) and summary.json to "
-            << out_dir.string() << "\n";
+  io::PrepareOutputDir(output.dir, flags.force);
+  eval::ExtractionCallbacks callbacks;
+  callbacks.on_image = [](const std::string& line) { std::cout << line << "\n"; };
+  callbacks.on_note = [](const std::string& note) { spdlog::info("{}", note); };
+  const nlohmann::json summary = eval::ExtractToFolder(*method, next, output, callbacks);
+  std::cout << "wrote " << summary["images"].size() << " overlay(s) and summary.json to "
+            << output.dir.string() << "\n";
 }
 
 }  // namespace
@@ -90,15 +73,19 @@ void AddExtractCommand(CLI::App& app) {
   auto flags = std::make_shared<ExtractFlags>();
   CLI::App* command = app.add_subcommand(
       "extract",
-      "Extract feature points from images: overlay PNGs (colour = pyramid level) and summary.json");
-  command->add_option("images", flags->images, "Images (8-bit PNG, JPEG, ...)")->required();
+      "Extract feature points from images, a sequence folder or a ROS bag: overlay PNGs "
+      "(colour = pyramid level) and summary.json");
+  command->add_option("images", flags->images, "Images (8-bit PNG, JPEG, ...)");
+  AddSourceFlags(*command, flags->source, SourceKinds::kRecordings);
+  command->add_option("--max-frames", flags->source.options.max_frames,
+                      "With --dataset or --bag: the first N frames only (0: all)");
   AddMethodFlags(*command, flags->method);
   command->add_option("--mask", flags->mask,
                       "Exclusion mask PNG of the images' size: no point where it is non-zero "
                       "(e.g. a hand-made dynamic region)");
   command->add_option("-o,--out", flags->out, "Output folder")->capture_default_str();
   command->add_flag("--force", flags->force, "Write into an existing, non-empty output folder");
-  command->callback([flags] { RunExtract(*flags); });
+  command->callback([flags, command] { RunExtract(*flags, flags->source.Options(*command)); });
 }
 
 }  // namespace noctua::app

@@ -17,7 +17,14 @@ struct SourceFlags {
   io::FrameSourceOptions Options(const CLI::App& command) const;
 };
 
-// Adds the flags to a subcommand; --dataset, --bag and --live exclude one another.
-void AddSourceFlags(CLI::App& command, SourceFlags& flags);
+// Which sources a command reads.
+enum class SourceKinds {
+  kAll,         // folder, bag or camera, and --replay-rate (slam)
+  kRecordings,  // folder or bag only, every frame (extract, eval)
+};
+
+// Adds the flags to a subcommand; --dataset, --bag and --live exclude one another. With
+// SourceKinds::kRecordings the command has no --live and no --replay-rate.
+void AddSourceFlags(CLI::App& command, SourceFlags& flags, SourceKinds kinds = SourceKinds::kAll);
 
 }  // namespace noctua::app
