@@ -73,13 +73,19 @@ class Slam {
   slam::TrackResult last_;
 };
 
-py::dict RunSlamOnSequence(const std::string& dataset, const std::string& config,
+py::dict RunSlamOnSequence(const py::object& dataset, const py::object& bag,
+                           const std::string& rgb_topic, const std::string& depth_topic,
+                           const py::object& groundtruth, const std::string& config,
                            const std::string& method, const py::object& detector, int max_frames,
                            const py::object& out, double brightness, bool sequential, bool force,
                            const py::object& video, const py::object& map_ply,
                            const py::object& load_map, bool localize, const py::object& save_map) {
   eval::SlamRunOptions options;
-  options.source.dataset = dataset;
+  options.source.dataset = PathArgument(dataset);
+  options.source.bag = PathArgument(bag);
+  options.source.rgb_topic = rgb_topic;
+  options.source.depth_topic = depth_topic;
+  options.source.ground_truth = PathArgument(groundtruth);
   options.config = config;
   options.method = method;
   options.detector_model = PathArgument(detector).string();
@@ -134,7 +140,8 @@ Slam(config, method="paper", detector=None)
       .def_property_readonly("keyframes", &Slam::keyframes)
       .def_property_readonly("map_points", &Slam::map_points)
       .def_property_readonly("depth_factor", &Slam::depth_factor);
-  m.def("run_slam", &RunSlamOnSequence, py::arg("sequence_dir"), py::arg("config"),
+  m.def("run_slam", &RunSlamOnSequence, py::arg("sequence_dir"), py::arg("bag"),
+        py::arg("rgb_topic"), py::arg("depth_topic"), py::arg("groundtruth"), py::arg("config"),
         py::arg("method"), py::arg("detector"), py::arg("max_frames"), py::arg("out"),
         py::arg("brightness"), py::arg("sequential"), py::arg("force"), py::arg("video"),
         py::arg("map_ply"), py::arg("load_map"), py::arg("localize"), py::arg("save_map"),

@@ -11,5 +11,6 @@ void BindDynamic(pybind11::module_& m);
 void BindSim(pybind11::module_& m);
 void BindSlam(pybind11::module_& m);
 void BindEval(pybind11::module_& m);
+void BindFrames(pybind11::module_& m);
 
 }  // namespace noctua::python

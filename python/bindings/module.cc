@@ -28,4 +28,5 @@ PYBIND11_MODULE(_noctua, m) {
   noctua::python::BindSim(m);
   noctua::python::BindSlam(m);
   noctua::python::BindEval(m);
+  noctua::python::BindFrames(m);
 }

@@ -12,6 +12,7 @@ from ._noctua import (  # noqa: F401  (the public API)
     Detector,
     Error,
     Extractor,
+    FrameSource,
     LowLightSimulator,
     SensorModel,
     Slam,
@@ -69,10 +70,24 @@ def config_path(name):
     return _os.path.join(config_dir(), name)
 
 
-def run_slam(sequence_dir, config, method="paper", detector=None, max_frames=0, out=None,
-             brightness=1.0, sequential=False, force=False, video=None, map_ply=None,
-             load_map=None, localize=False, save_map=None):
-    """Runs the SLAM over a TUM / OpenLORIS sequence folder, as ``noctua slam`` does.
+TUM_RGB_TOPIC = "/camera/rgb/image_color"
+TUM_DEPTH_TOPIC = "/camera/depth/image"
+
+
+def _path(value):
+    return None if value is None else _os.fspath(value)
+
+
+def run_slam(sequence_dir=None, config=None, method="paper", detector=None, max_frames=0,
+             out=None, brightness=1.0, sequential=False, force=False, video=None, map_ply=None,
+             load_map=None, localize=False, save_map=None, bag=None, rgb_topic=TUM_RGB_TOPIC,
+             depth_topic=TUM_DEPTH_TOPIC, groundtruth=None):
+    """Runs the SLAM over a TUM / OpenLORIS sequence folder or a ROS1 bag, as ``noctua slam``
+    does (``--dataset`` or ``--bag``).
+
+    Give ``sequence_dir`` or ``bag`` (a ROS1 bag of sensor_msgs/Image colour and depth on
+    ``rgb_topic`` and ``depth_topic``, TUM's names by default; ``groundtruth``: its TUM-format
+    ground truth for ATE/RPE), and ``config``, the camera preset.
 
     Returns a dict: ``trajectory`` ((N, 8) TUM rows), ``report`` (report.json's content:
     frames, lost frames, timing, ATE/RPE with ground truth) and ``frames_csv`` (frames.csv's
@@ -85,11 +100,40 @@ def run_slam(sequence_dir, config, method="paper", detector=None, max_frames=0, 
     a new one; with ``localize`` the run only localises in it and leaves it unchanged.
     ``save_map`` writes the map at the end of the run (``report["map"]`` says what was done).
     """
+    if config is None:
+        raise Error("run_slam needs config (a camera preset, e.g. config_path('tum_fr1.yaml'))")
     return _noctua.run_slam(
-        _os.fspath(sequence_dir), _os.fspath(config), method,
-        None if detector is None else _os.fspath(detector), max_frames,
-        None if out is None else _os.fspath(out), brightness, sequential, force,
-        None if video is None else _os.fspath(video),
-        None if map_ply is None else _os.fspath(map_ply),
-        None if load_map is None else _os.fspath(load_map), localize,
-        None if save_map is None else _os.fspath(save_map))
+        _path(sequence_dir), _path(bag), rgb_topic, depth_topic, _path(groundtruth),
+        _os.fspath(config), method, _path(detector), max_frames, _path(out), brightness,
+        sequential, force, _path(video), _path(map_ply), _path(load_map), localize,
+        _path(save_map))
+
+
+def open_frames(dataset=None, bag=None, rgb_topic=TUM_RGB_TOPIC, depth_topic=TUM_DEPTH_TOPIC,
+                groundtruth=None, max_frames=0, depth_factor=5000.0):
+    """The frames of a sequence folder or a ROS1 bag, in time order, as ``noctua slam`` and
+    ``noctua extract`` read them (``--dataset`` or ``--bag``).
+
+    Returns a ``FrameSource``, an iterator of dicts: ``index``, ``timestamp`` (s), ``image``
+    (uint8 BGR), ``depth`` (float32 metres, 0 = none) and ``ground_truth`` (4x4
+    T_world_camera at the timestamp, or None). A bag's colour and depth are on ``rgb_topic`` and
+    ``depth_topic`` (TUM's names by default); ``groundtruth`` is its TUM-format ground truth (a
+    folder has its own). ``max_frames``: the first frames only (0: all); ``depth_factor``: a
+    folder's 16-bit depth per metre. A bag without those topics raises ``noctua.Error`` naming
+    the file, the topic and the bag's image topics. For example::
+
+        extractor = noctua.Extractor("paper")
+        for frame in noctua.open_frames(bag="fr1.bag"):
+            keypoints, descriptors = extractor.extract(frame["image"])
+    """
+    return _noctua.open_frames(_path(dataset), _path(bag), rgb_topic, depth_topic,
+                               _path(groundtruth), max_frames, depth_factor)
+
+
+def write_bag(sequence_dir, path, max_frames=0, depth_factor=5000.0, rgb_topic=TUM_RGB_TOPIC,
+              depth_topic=TUM_DEPTH_TOPIC, rgb_encoding="rgb8", depth_encoding="32FC1"):
+    """Writes a TUM / OpenLORIS sequence folder as a ROS1 bag in TUM's layout (colour
+    ``rgb8``/``bgr8``, depth ``32FC1`` metres or ``16UC1`` millimetres), stamped with the images'
+    times; ``max_frames``: the first frames only (0: all)."""
+    _noctua.write_bag(_os.fspath(sequence_dir), _os.fspath(path), max_frames, depth_factor,
+                      rgb_topic, depth_topic, rgb_encoding, depth_encoding)
