@@ -57,8 +57,8 @@ def test_ground_truth_of_a_bag_is_interpolated_at_each_frame(bag, tum_sequence):
 
 def test_run_slam_on_a_bag_tracks_and_scores_against_its_ground_truth(bag, tum_sequence,
                                                                        tum_config, tmp_path):
-    result = noctua.run_slam(bag=bag, config=tum_config, groundtruth=tum_sequence / "groundtruth.txt",
-                             method="orb", out=tmp_path / "slam")
+    result = noctua.run_slam(bag=bag, config=tum_config, method="orb", out=tmp_path / "slam",
+                             groundtruth=tum_sequence / "groundtruth.txt")
     report = result["report"]
     assert report["frames"] == FRAMES
     assert report["bag"] == str(bag)
