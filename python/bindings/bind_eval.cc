@@ -3,7 +3,10 @@
 
 #include "bindings.h"
 #include "convert.h"
+#include "noctua/eval/feature_eval.h"
 #include "noctua/eval/trajectory_error.h"
+#include "noctua/io/output_dir.h"
+#include "noctua/pipeline/method_config.h"
 
 namespace noctua::python {
 namespace {
@@ -24,9 +27,86 @@ py::array_t<double> Vector(const std::vector<double>& values) {
   return py::array_t<double>(static_cast<py::ssize_t>(values.size()), values.data());
 }
 
+py::dict ScoreToDict(const eval::MethodScore& score) {
+  py::list counts;
+  for (const auto& c : score.counts) {
+    py::dict row;
+    row["frame"] = c.frame;
+    row["timestamp"] = c.timestamp;
+    row["count"] = c.count;
+    row["extract_ms"] = c.extract_ms;
+    counts.append(row);
+  }
+  py::list pairs;
+  for (const auto& p : score.pairs) {
+    py::dict row;
+    row["frame_i"] = p.frame_i;
+    row["frame_j"] = p.frame_j;
+    row["matches"] = p.matches;
+    row["no_depth"] = p.no_depth;
+    row["on_dynamic"] = p.on_dynamic;
+    row["correct"] = p.correct;
+    pairs.append(row);
+  }
+  py::dict dict;
+  dict["counts"] = counts;
+  dict["pairs"] = pairs;
+  return dict;
+}
+
+// The feature evaluation of `noctua eval` on a folder or a bag (eval::OpenEvalSequence).
+py::dict EvaluateFeatures(const py::object& dataset, const py::object& bag,
+                          const std::string& rgb_topic, const std::string& depth_topic,
+                          const py::object& groundtruth, const py::object& camera,
+                          const std::vector<std::string>& method_names, int gap, int pair_step,
+                          int max_frames, double ratio, const py::object& config,
+                          const py::object& out, bool force) {
+  io::FrameSourceOptions source;
+  source.dataset = PathArgument(dataset);
+  source.bag = PathArgument(bag);
+  source.rgb_topic = rgb_topic;
+  source.depth_topic = depth_topic;
+  source.ground_truth = PathArgument(groundtruth);
+  eval::FeatureEvalOptions options;
+  options.gap = gap;
+  options.pair_step = pair_step;
+  options.max_frames = max_frames;
+  options.ratio = ratio;
+  options.Check();
+  const pipeline::MethodConfig method_config = pipeline::LoadMethodConfig(PathArgument(config), "");
+  std::vector<std::unique_ptr<pipeline::FeatureMethod>> methods;
+  for (const auto& name : method_names)
+    methods.push_back(pipeline::CreateMethod(name, method_config));
+  const io::CameraConfig camera_config = io::ReadCameraConfig(PathArgument(camera));
+  const std::filesystem::path out_dir = PathArgument(out);
+  eval::FeatureEvalResult result;
+  {
+    py::gil_scoped_release release;
+    const eval::EvalSequence sequence =
+        eval::OpenEvalSequence(source, camera_config, static_cast<std::size_t>(options.max_frames));
+    if (!out_dir.empty()) io::PrepareOutputDir(out_dir, force);
+    result = eval::EvaluateFeatures(sequence, methods, options);
+    if (!out_dir.empty()) eval::WriteFeatureEvalReport(result, out_dir);
+  }
+  py::dict methods_dict;
+  for (const auto& score : result.methods) methods_dict[py::str(score.method)] = ScoreToDict(score);
+  py::dict dict;
+  dict["dataset"] = result.dataset;
+  dict["taus"] = result.taus;
+  dict["default_tau"] = result.default_tau;
+  dict["methods"] = methods_dict;
+  dict["markdown"] = eval::SummaryMarkdown(result);
+  return dict;
+}
+
 }  // namespace
 
 void BindEval(py::module_& m) {
+  m.def("evaluate_features", &EvaluateFeatures, py::arg("dataset"), py::arg("bag"),
+        py::arg("rgb_topic"), py::arg("depth_topic"), py::arg("groundtruth"), py::arg("camera"),
+        py::arg("methods"), py::arg("gap"), py::arg("pair_step"), py::arg("max_frames"),
+        py::arg("ratio"), py::arg("config"), py::arg("out"), py::arg("force"),
+        "See noctua.evaluate_features (the Python wrapper documents it).");
   m.def(
       "read_trajectory",
       [](const py::object& path) {

@@ -137,3 +137,28 @@ def write_bag(sequence_dir, path, max_frames=0, depth_factor=5000.0, rgb_topic=T
     times; ``max_frames``: the first frames only (0: all)."""
     _noctua.write_bag(_os.fspath(sequence_dir), _os.fspath(path), max_frames, depth_factor,
                       rgb_topic, depth_topic, rgb_encoding, depth_encoding)
+
+
+def evaluate_features(dataset=None, bag=None, camera=None, groundtruth=None,
+                      methods=("orb", "paper"), gap=20, pair_step=1, max_frames=0, ratio=0.8,
+                      config=None, out=None, force=False, rgb_topic=TUM_RGB_TOPIC,
+                      depth_topic=TUM_DEPTH_TOPIC):
+    """The feature evaluation of ``noctua eval`` (docs/evaluation.md) on a sequence folder or a
+    ROS1 bag: points per frame and matches of frame i against i + ``gap`` judged correct from
+    depth and the ground-truth poses.
+
+    A folder brings its ground truth and, unless ``camera`` (a preset) is given, its
+    camera.yaml; a bag needs ``groundtruth`` (TUM format) and ``camera``. ``max_frames`` counts
+    the frames with ground truth (0: all). With ``out``, writes the command's report there.
+    Returns a dict: ``dataset``, ``taus``, ``default_tau``, ``markdown`` (the summary table) and
+    ``methods``: per method name, ``counts`` (frame, timestamp, count, extract_ms) and ``pairs``
+    (frame_i, frame_j, matches, no_depth, on_dynamic, correct per tau).
+    """
+    if camera is None and dataset is not None:
+        camera = _os.path.join(_os.fspath(dataset), "camera.yaml")
+    if camera is None:
+        raise Error("evaluate_features with a bag needs camera (a preset, e.g. "
+                    "config_path('tum_fr1.yaml'))")
+    return _noctua.evaluate_features(
+        _path(dataset), _path(bag), rgb_topic, depth_topic, _path(groundtruth), _path(camera),
+        list(methods), gap, pair_step, max_frames, ratio, _path(config), _path(out), force)

@@ -76,3 +76,21 @@ def test_a_bag_without_the_topic_names_the_file_and_topic(bag, tum_config):
         noctua.open_frames()
     with pytest.raises(noctua.Error, match="config"):
         noctua.run_slam(bag=bag)
+
+
+def test_evaluate_features_on_a_bag_scores_every_pair_as_on_the_folder(bag, tum_sequence,
+                                                                        tmp_path):
+    camera = noctua.config_path("tum_fr1.yaml")
+    common = dict(camera=camera, methods=["orb"], gap=5, max_frames=20)
+    folder = noctua.evaluate_features(dataset=tum_sequence, **common)
+    from_bag = noctua.evaluate_features(bag=bag, groundtruth=tum_sequence / "groundtruth.txt",
+                                        out=tmp_path / "eval", **common)
+    assert from_bag["dataset"] == "fr1.bag"
+    a, b = folder["methods"]["orb"], from_bag["methods"]["orb"]
+    assert [c["count"] for c in b["counts"]] == [c["count"] for c in a["counts"]]
+    assert len(b["pairs"]) == 15
+    assert b["pairs"] == a["pairs"]
+    assert sum(p["matches"] for p in a["pairs"]) > 15 * 50
+    assert (tmp_path / "eval" / "pairs.csv").exists()
+    with pytest.raises(noctua.Error, match=r"fr1\.bag.*--groundtruth"):
+        noctua.evaluate_features(bag=bag, **common)
