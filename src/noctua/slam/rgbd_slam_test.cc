@@ -6,6 +6,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <mutex>
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -332,6 +333,43 @@ TEST_F(RgbdSlamTest, RelocalisesWithAndWithoutTheVocabulary) {
   missing.vocabulary = "/nonexistent/v.vocab";
   EXPECT_THAT([&] { RgbdSlam(setup_->camera.Camera(), Orb(*setup_), missing); },
               ::testing::ThrowsMessage<Error>(HasSubstr("/nonexistent/v.vocab")));
+}
+
+// Keyframes culled by local mapping leave the keyframe database with the map (culling made
+// frequent here with a low redundancy threshold).
+TEST_F(RgbdSlamTest, CulledKeyFramesLeaveTheKeyFrameDatabase) {
+  SlamOptions options = setup_->options;
+  options.vocabulary =
+      (std::filesystem::path(NOCTUA_SOURCE_DIR) / "data/vocabulary/default.vocab").string();
+  options.keyframe_redundancy = 0.3;
+  RgbdSlam slam(setup_->camera.Camera(), Orb(*setup_), options);
+  RunOptions run_options;
+  run_options.max_frames = 100;
+  RunSequence(slam, *sequence_, setup_->camera.depth_factor, run_options);
+  const Map& map = slam.tracker().map();
+  std::vector<long> ids;
+  for (const KeyFrame* keyframe : map.KeyFrames()) ids.push_back(keyframe->id());
+  ASSERT_LT(ids.size(), map.all_keyframes().size());  // some were culled
+  EXPECT_EQ(slam.tracker().keyframe_database().Ids(), ids);
+}
+
+// The settings file's Vocabulary.file: absent, the shipped vocabulary; "none" as given; a
+// relative file name relative to the settings file.
+TEST(SlamSetupVocabulary, ComesFromTheSettingsFile) {
+  const auto dir = std::filesystem::temp_directory_path() /
+                   ("noctua_slam_vocabulary_test_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  std::ifstream in(kConfigDir / "tum_fr1.yaml");
+  const std::string preset((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(LoadSlamSetup(kConfigDir / "tum_fr1.yaml").options.vocabulary, "default");
+  for (const auto& [value, expected] :
+       std::vector<std::pair<std::string, std::string>>{{"none", "none"},
+                                                        {"my.vocab", (dir / "my.vocab").string()},
+                                                        {"/abs/v.vocab", "/abs/v.vocab"}}) {
+    std::ofstream(dir / "s.yaml") << preset << "\nVocabulary.file: \"" << value << "\"\n";
+    EXPECT_EQ(LoadSlamSetup(dir / "s.yaml").options.vocabulary, expected) << value;
+  }
+  std::filesystem::remove_all(dir);
 }
 
 TEST_F(RgbdSlamTest, BadConfigAndBadDataFailClearly) {
