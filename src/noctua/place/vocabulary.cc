@@ -426,6 +426,8 @@ Vocabulary Vocabulary::Parse(std::string_view bytes, const std::string& name) {
   if (r.U32() != kDescriptorBytes) r.Fail("descriptors are not 32 bytes");
   v.training_images_ = static_cast<int>(r.U32());
   const std::uint32_t num_nodes = r.U32();
+  // The direct-index level is no part of the file (it does not change the words): a loaded
+  // vocabulary uses the default level, 2 (L when smaller); set_direct_index_level changes it.
   VocabularyOptions shape;
   shape.branching = v.branching_;
   shape.levels = v.levels_;
