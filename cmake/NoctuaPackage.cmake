@@ -46,6 +46,9 @@ install(FILES ${PROJECT_BINARY_DIR}/package/noctua.pc
 # The camera presets, for the examples and for running the installed command on TUM/OpenLORIS.
 install(DIRECTORY config/ DESTINATION ${CMAKE_INSTALL_DATADIR}/noctua/config
         FILES_MATCHING PATTERN "*.yaml")
+# The default place-recognition vocabulary, found by place::FindDefaultVocabulary.
+install(DIRECTORY data/vocabulary/ DESTINATION ${CMAKE_INSTALL_DATADIR}/noctua/vocabulary
+        FILES_MATCHING PATTERN "*.vocab")
 install(FILES LICENSE README.md DESTINATION ${CMAKE_INSTALL_DOCDIR})
 
 set(CPACK_PACKAGE_NAME noctua)

@@ -32,6 +32,7 @@ for unwanted in include/noctua/testing include/noctua/fuzz include/noctua/slam/r
   [ ! -e "$prefix/$unwanted" ] || fail "$unwanted is installed"
 done
 if find "$prefix" -name '*_test*' | grep -q .; then fail "test files are installed"; fi
+[ -f "$prefix/share/noctua/vocabulary/default.vocab" ] || fail "the default vocabulary is not installed"
 
 echo "check_package: building examples/ against the installed package"
 cmake -S examples -B "$work/examples" -DCMAKE_PREFIX_PATH="$prefix" >"$work/examples.log" 2>&1 ||

@@ -218,7 +218,34 @@ TEST_F(CliTest, HelpExitsZeroForEveryCommand) {
   EXPECT_EQ(RunNoctua("simulate --help").exit_code, 0);
   EXPECT_EQ(RunNoctua("eval --help").exit_code, 0);
   EXPECT_EQ(RunNoctua("detect --help").exit_code, 0);
+  EXPECT_EQ(RunNoctua("vocab --help").exit_code, 0);
   EXPECT_NE(RunNoctua("").exit_code, 0);
+}
+
+// A small vocabulary from 6 frames of a sequence folder: the same bytes twice (fixed seed), k^L
+// words at most; a folder without images is refused naming it.
+TEST_F(CliTest, VocabTrainsTheSameFileTwiceAndRefusesAFolderWithoutImages) {
+  const std::string bonn = (noctua::testing::DataDir() / "bonn_crowd_120").string();
+  std::string first;
+  for (const char* name : {"a.vocab", "b.vocab"}) {
+    const auto out = dir_ / name;
+    const CommandResult trained =
+        RunNoctua("vocab " + bonn + " --max-images 6 --k 4 --levels 2 " + "--out " + out.string());
+    ASSERT_EQ(trained.exit_code, 0) << trained.output;
+    EXPECT_THAT(trained.output, HasSubstr("16 words (k 4, L 2) from 6 images"));
+    std::ifstream in(out, std::ios::binary);
+    const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    if (first.empty()) {
+      first = bytes;
+    } else {
+      EXPECT_EQ(bytes, first);
+    }
+  }
+  std::filesystem::create_directories(dir_ / "empty");
+  const CommandResult empty =
+      RunNoctua("vocab " + (dir_ / "empty").string() + " --out " + (dir_ / "e.vocab").string());
+  EXPECT_EQ(empty.exit_code, 1);
+  EXPECT_THAT(empty.output, HasSubstr((dir_ / "empty").string() + ": holds no image"));
 }
 
 TEST_F(CliTest, SimulateThenEvalWriteATumSequenceAndTheReport) {

@@ -171,6 +171,10 @@ void AddSlamCommand(CLI::App& app) {
                  "With --load-map: only localise in that map and leave it unchanged (no new "
                  "keyframes or points, no bundle adjustment)")
       ->needs(load_map);
+  command->add_option("--vocabulary", args->run.vocabulary,
+                      "Place-recognition vocabulary for relocalisation: a file (noctua vocab), "
+                      "'default' (the shipped one) or 'none' (match against every keyframe); "
+                      "default: the settings file's Vocabulary.file, else 'default'");
   command->add_option("--save-map", args->run.save_map,
                       "Write the map into this file at the end of the run (docs/slam.md, Saving "
                       "and reusing a map)");

@@ -16,6 +16,7 @@ void AddDetectCommand(CLI::App& app);
 void AddAteCommand(CLI::App& app);
 void AddRpeCommand(CLI::App& app);
 void AddSlamCommand(CLI::App& app);
+void AddVocabCommand(CLI::App& app);
 void AddSimulateCommand(CLI::App& app);
 void AddEvalCommand(CLI::App& app);
 void AddBenchCommand(CLI::App& app);

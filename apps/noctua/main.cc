@@ -29,6 +29,7 @@ int main(int argc, char** argv) {
   noctua::app::AddAteCommand(app);
   noctua::app::AddRpeCommand(app);
   noctua::app::AddSlamCommand(app);
+  noctua::app::AddVocabCommand(app);
   noctua::app::AddSimulateCommand(app);
   noctua::app::AddEvalCommand(app);
   noctua::app::AddBenchCommand(app);

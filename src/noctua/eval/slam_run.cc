@@ -157,6 +157,7 @@ slam::SlamSetup CheckedSetup(const SlamRunOptions& options) {
   options.Check();
   slam::SlamSetup setup = slam::LoadSlamSetup(options.config);
   setup.options.reject_moving_points = options.reject_moving_points;
+  if (!options.vocabulary.empty()) setup.options.vocabulary = options.vocabulary;
   return setup;
 }
 

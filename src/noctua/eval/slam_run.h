@@ -41,6 +41,10 @@ struct SlamRunOptions {
   bool detect_inline = false;
   // Model-free rejection of moving points (slam::SlamOptions::reject_moving_points).
   bool reject_moving_points = false;
+  // Place-recognition vocabulary for relocalisation (slam::SlamOptions::vocabulary): "" keeps the
+  // settings file's Vocabulary.file (by default the shipped vocabulary); "none", "default" or a
+  // vocabulary file.
+  std::string vocabulary;
   // A window, a video and the map as a PLY (viz/viewer.h); none by default.
   viz::ViewerOptions viewer;
   // Maps that outlive a run (slam/map_io.h): start from the map saved in `load_map` (made with the

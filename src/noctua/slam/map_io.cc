@@ -247,6 +247,8 @@ MapIdentity MakeMapIdentity(const std::string& method, const geometry::PinholeCa
   identity.scale_factor = options.scale_factor;
   identity.num_levels = options.num_levels;
   identity.bf = options.bf;
+  const auto vocabulary = LoadSlamVocabulary(options);
+  identity.vocabulary = vocabulary != nullptr ? vocabulary->identity() : "";
   return identity;
 }
 

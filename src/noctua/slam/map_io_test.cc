@@ -185,6 +185,12 @@ TEST_F(MapIoTest, RefusesWhatIsNotAMapOfThisVersionAndRun) {
   MapIdentity pyramid = *identity_;
   pyramid.num_levels = 4;
   EXPECT_TRUE(has(Refusal("pyramid.map", *bytes_, pyramid), "pyramid levels"));
+  // The map was made with the shipped vocabulary: a run without one, or with another, refuses it.
+  ASSERT_EQ(identity_->vocabulary.rfind("k8L4-", 0), 0u) << identity_->vocabulary;
+  MapIdentity no_vocabulary = *identity_;
+  no_vocabulary.vocabulary = "";
+  const std::string without = Refusal("vocabulary.map", *bytes_, no_vocabulary);
+  EXPECT_TRUE(has(without, "vocabulary '" + identity_->vocabulary + "'")) << without;
 }
 
 // Random cuts and byte flips of a real map are all refused with an Error: by the length and the

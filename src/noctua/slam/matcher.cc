@@ -226,25 +226,82 @@ int Matcher::SearchByDescriptor(const KeyFrame& keyframe, const Frame& frame,
       best_query[train] = static_cast<int>(q);
     }
   }
+  std::vector<int> best_point(static_cast<std::size_t>(frame.size()), -1);
+  for (int f = 0; f < frame.size(); ++f) {
+    const int q = best_query[static_cast<std::size_t>(f)];
+    if (q >= 0)
+      best_point[static_cast<std::size_t>(f)] = keyframe_indices[static_cast<std::size_t>(q)];
+  }
+  return CollectMatches(keyframe, frame, best_point, matches);
+}
+
+int Matcher::SearchByFeatureVector(const KeyFrame& keyframe,
+                                   const place::FeatureVector& keyframe_features,
+                                   const Frame& frame, const place::FeatureVector& frame_features,
+                                   std::vector<MapPoint*>& matches) const {
+  matches.assign(static_cast<std::size_t>(frame.size()), nullptr);
+  std::vector<int> best_point(static_cast<std::size_t>(frame.size()), -1);
+  std::vector<int> best_distance(static_cast<std::size_t>(frame.size()), 256);
+  const FrameFeatures& features = keyframe.features();
+  auto k = keyframe_features.begin();
+  auto f = frame_features.begin();
+  while (k != keyframe_features.end() && f != frame_features.end()) {
+    if (k->first < f->first) {
+      ++k;
+      continue;
+    }
+    if (f->first < k->first) {
+      ++f;
+      continue;
+    }
+    for (int i : k->second) {
+      const MapPoint* point = keyframe.map_point(i);
+      if (point == nullptr || point->bad()) continue;
+      int best = 256, second = 256, best_index = -1;
+      for (int j : f->second) {
+        const int distance =
+            DescriptorDistance(features.descriptor(i), frame.features->descriptor(j));
+        if (distance < best) {
+          second = best;
+          best = distance;
+          best_index = j;
+        } else if (distance < second) {
+          second = distance;
+        }
+      }
+      if (best_index < 0 || best > kThresholdLow || best >= ratio_ * second) continue;
+      const auto at = static_cast<std::size_t>(best_index);
+      if (best < best_distance[at]) {
+        best_distance[at] = best;
+        best_point[at] = i;
+      }
+    }
+    ++k;
+    ++f;
+  }
+  return CollectMatches(keyframe, frame, best_point, matches);
+}
+
+int Matcher::CollectMatches(const KeyFrame& keyframe, const Frame& frame,
+                            const std::vector<int>& best_point,
+                            std::vector<MapPoint*>& matches) const {
   std::vector<int> matched;
   std::vector<float> angle_changes;
   for (int f = 0; f < frame.size(); ++f) {
-    const int q = best_query[static_cast<std::size_t>(f)];
-    if (q < 0 || frame.moving[static_cast<std::size_t>(f)]) continue;
+    const int i = best_point[static_cast<std::size_t>(f)];
+    if (i < 0 || frame.moving[static_cast<std::size_t>(f)]) continue;
     matched.push_back(f);
-    angle_changes.push_back(
-        keyframe.features().keypoint(keyframe_indices[static_cast<std::size_t>(q)]).angle -
-        frame.features->keypoint(f).angle);
+    angle_changes.push_back(keyframe.features().keypoint(i).angle -
+                            frame.features->keypoint(f).angle);
   }
   std::vector<int> kept = matched;
   KeepConsistentRotation(angle_changes, kept);
   int count = 0;
-  for (std::size_t k = 0; k < matched.size(); ++k) {
-    if (kept[k] < 0) continue;
-    const int f = matched[k];
-    const int q = best_query[static_cast<std::size_t>(f)];
+  for (std::size_t m = 0; m < matched.size(); ++m) {
+    if (kept[m] < 0) continue;
+    const int f = matched[m];
     matches[static_cast<std::size_t>(f)] =
-        keyframe.map_point(keyframe_indices[static_cast<std::size_t>(q)]);
+        keyframe.map_point(best_point[static_cast<std::size_t>(f)]);
     ++count;
   }
   return count;

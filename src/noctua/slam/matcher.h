@@ -2,6 +2,7 @@
 
 #include <vector>
 
+#include "noctua/place/vocabulary.h"
 #include "noctua/slam/frame.h"
 #include "noctua/slam/map.h"
 
@@ -34,8 +35,19 @@ class Matcher {
   int SearchByDescriptor(const KeyFrame& keyframe, const Frame& frame,
                          std::vector<MapPoint*>& matches) const;
 
+  // ORB-SLAM's SearchByBoW: the same matching, but a keyframe point is compared only with the
+  // frame keypoints under the same vocabulary node (the direct indexes `keyframe_features` and
+  // `frame_features`, place::FeatureVector).
+  int SearchByFeatureVector(const KeyFrame& keyframe, const place::FeatureVector& keyframe_features,
+                            const Frame& frame, const place::FeatureVector& frame_features,
+                            std::vector<MapPoint*>& matches) const;
+
  private:
   // Keeps only matches whose angle change falls in the three most common 12-degree bins.
+  // Keeps, per frame keypoint, the best keyframe point that passed the distance and ratio tests
+  // (best_point[f], -1 for none), after the rotation check; returns the count.
+  int CollectMatches(const KeyFrame& keyframe, const Frame& frame,
+                     const std::vector<int>& best_point, std::vector<MapPoint*>& matches) const;
   void KeepConsistentRotation(const std::vector<float>& angle_changes,
                               std::vector<int>& matched_indices) const;
 

@@ -6,6 +6,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <mutex>
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -16,6 +17,7 @@
 #include "noctua/pipeline/method.h"
 #include "noctua/sim/sequence.h"
 #include "noctua/slam/map.h"
+#include "noctua/slam/map_io.h"
 #include "noctua/testing/shared_data.h"
 #include "noctua/util/error.h"
 
@@ -286,6 +288,88 @@ TEST_F(RgbdSlamTest, KeyFramesResumeRightAfterARelocalisationUnlessPaused) {
   SlamOptions bad = setup_->options;
   bad.keyframe_pause_after_relocalisation = -1;
   EXPECT_THROW(bad.Check(), Error);
+}
+
+// Relocalisation through the place-recognition vocabulary (the shipped one) and without one
+// (every keyframe matched): after 20 black frames both resume at frame 60 with a sound pose;
+// with the vocabulary the keyframe database holds exactly the map's good keyframes, and the
+// map's identity names the vocabulary.
+TEST_F(RgbdSlamTest, RelocalisesWithAndWithoutTheVocabulary) {
+  const std::filesystem::path shipped =
+      std::filesystem::path(NOCTUA_SOURCE_DIR) / "data" / "vocabulary" / "default.vocab";
+  for (const std::string& vocabulary : {shipped.string(), std::string("none")}) {
+    SCOPED_TRACE(vocabulary);
+    SlamOptions options = setup_->options;
+    options.vocabulary = vocabulary;
+    RgbdSlam slam(setup_->camera.Camera(), Orb(*setup_), options);
+    RunOptions run_options;
+    run_options.max_frames = 100;
+    run_options.transform_image = [](int index, const cv::Mat& image) {
+      return index >= 40 && index < 60 ? cv::Mat(image.size(), image.type(), cv::Scalar::all(0))
+                                       : image;
+    };
+    const SequenceRun run = RunSequence(slam, *sequence_, setup_->camera.depth_factor, run_options);
+    EXPECT_EQ(run.frames[60].method, "relocalisation");
+    for (int i = 60; i < 100; ++i)
+      EXPECT_EQ(run.frames[static_cast<std::size_t>(i)].state, TrackingState::kOk) << i;
+    const eval::AteResult ate = eval::ComputeAte(sequence_->ground_truth(), run.trajectory);
+    EXPECT_LT(ate.translation_m.rmse, 0.09);
+    const Tracker& tracker = slam.tracker();
+    const std::vector<KeyFrame*> keyframes = tracker.map().KeyFrames();
+    if (vocabulary == "none") {
+      EXPECT_EQ(tracker.vocabulary(), nullptr);
+      EXPECT_EQ(tracker.keyframe_database().size(), 0);
+      EXPECT_EQ(MakeMapIdentity("orb", setup_->camera.Camera(), options).vocabulary, "");
+      continue;
+    }
+    ASSERT_NE(tracker.vocabulary(), nullptr);
+    std::vector<long> ids;
+    for (const KeyFrame* keyframe : keyframes) ids.push_back(keyframe->id());
+    EXPECT_EQ(tracker.keyframe_database().Ids(), ids);
+    EXPECT_EQ(MakeMapIdentity("orb", setup_->camera.Camera(), options).vocabulary,
+              tracker.vocabulary()->identity());
+  }
+  SlamOptions missing = setup_->options;
+  missing.vocabulary = "/nonexistent/v.vocab";
+  EXPECT_THAT([&] { RgbdSlam(setup_->camera.Camera(), Orb(*setup_), missing); },
+              ::testing::ThrowsMessage<Error>(HasSubstr("/nonexistent/v.vocab")));
+}
+
+// Keyframes culled by local mapping leave the keyframe database with the map (culling made
+// frequent here with a low redundancy threshold).
+TEST_F(RgbdSlamTest, CulledKeyFramesLeaveTheKeyFrameDatabase) {
+  SlamOptions options = setup_->options;
+  options.vocabulary =
+      (std::filesystem::path(NOCTUA_SOURCE_DIR) / "data/vocabulary/default.vocab").string();
+  options.keyframe_redundancy = 0.3;
+  RgbdSlam slam(setup_->camera.Camera(), Orb(*setup_), options);
+  RunOptions run_options;
+  run_options.max_frames = 100;
+  RunSequence(slam, *sequence_, setup_->camera.depth_factor, run_options);
+  const Map& map = slam.tracker().map();
+  std::vector<long> ids;
+  for (const KeyFrame* keyframe : map.KeyFrames()) ids.push_back(keyframe->id());
+  ASSERT_LT(ids.size(), map.all_keyframes().size());  // some were culled
+  EXPECT_EQ(slam.tracker().keyframe_database().Ids(), ids);
+}
+
+// The settings file's Vocabulary.file: absent, the shipped vocabulary; "none" as given; a
+// relative file name relative to the settings file.
+TEST(SlamSetupVocabulary, ComesFromTheSettingsFile) {
+  const auto dir = std::filesystem::temp_directory_path() /
+                   ("noctua_slam_vocabulary_test_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  std::ifstream in(kConfigDir / "tum_fr1.yaml");
+  const std::string preset((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(LoadSlamSetup(kConfigDir / "tum_fr1.yaml").options.vocabulary, "default");
+  for (const auto& [value, expected] :
+       std::vector<std::pair<std::string, std::string>>{{"none", "none"},
+                                                        {"my.vocab", (dir / "my.vocab").string()},
+                                                        {"/abs/v.vocab", "/abs/v.vocab"}}) {
+    std::ofstream(dir / "s.yaml") << preset << "\nVocabulary.file: \"" << value << "\"\n";
+    EXPECT_EQ(LoadSlamSetup(dir / "s.yaml").options.vocabulary, expected) << value;
+  }
+  std::filesystem::remove_all(dir);
 }
 
 TEST_F(RgbdSlamTest, BadConfigAndBadDataFailClearly) {

@@ -1,5 +1,9 @@
 #include "noctua/slam/slam_options.h"
 
+#include <spdlog/spdlog.h>
+
+#include <atomic>
+
 #include "noctua/io/yaml_file.h"
 #include "noctua/util/error.h"
 
@@ -31,6 +35,22 @@ void SlamOptions::Check() const {
   CheckOption(moving_frames_to_cull >= 1, "slam: moving_frames_to_cull must be at least 1");
 }
 
+std::shared_ptr<const place::Vocabulary> LoadSlamVocabulary(const SlamOptions& options) {
+  if (options.vocabulary.empty() || options.vocabulary == "none") return nullptr;
+  if (options.vocabulary != "default") return place::LoadVocabularyShared(options.vocabulary);
+  const std::filesystem::path path = place::FindDefaultVocabulary();
+  if (path.empty()) {
+    static std::atomic<bool> warned{false};
+    if (!warned.exchange(true)) {
+      spdlog::warn(
+          "slam: the default vocabulary (share/noctua/vocabulary/default.vocab) was not found; "
+          "relocalisation matches against every keyframe (set NOCTUA_VOCABULARY)");
+    }
+    return nullptr;
+  }
+  return place::LoadVocabularyShared(path);
+}
+
 SlamSetup LoadSlamSetup(const std::filesystem::path& path) {
   SlamSetup setup;
   setup.camera = io::ReadCameraConfig(path);
@@ -41,6 +61,15 @@ SlamSetup LoadSlamSetup(const std::filesystem::path& path) {
   options.num_levels = setup.camera.orb.num_levels;
   options.bf = io::OptionalNumber(root, "Camera.bf", fx * 0.0773, path);
   options.close_depth_m = io::OptionalNumber(root, "ThDepth", 40.0, path) * options.bf / fx;
+  if (const YAML::Node vocabulary = root["Vocabulary.file"]; vocabulary) {
+    if (!vocabulary.IsScalar()) ThrowFileError(path, "Vocabulary.file must be a file name");
+    options.vocabulary = vocabulary.as<std::string>();
+    const bool named =
+        options.vocabulary != "" && options.vocabulary != "none" && options.vocabulary != "default";
+    if (named && std::filesystem::path(options.vocabulary).is_relative()) {
+      options.vocabulary = (path.parent_path() / options.vocabulary).string();
+    }
+  }
   try {
     options.Check();
   } catch (const Error& error) {

@@ -1,8 +1,11 @@
 #pragma once
 
 #include <filesystem>
+#include <memory>
+#include <string>
 
 #include "noctua/io/camera_config.h"
+#include "noctua/place/vocabulary.h"
 #include "noctua/slam/moving_points.h"
 
 namespace noctua::slam {
@@ -43,6 +46,12 @@ struct SlamOptions {
   // no keyframe for 30 frames and was lost for the last 77 frames; with 0 it loses 4 in all.
   int keyframe_pause_after_relocalisation = 0;
   int relocalisation_candidates = 5;  // keyframes tried by PnP, most descriptor matches first
+  // Place-recognition vocabulary (docs/slam.md, "Place recognition"): relocalisation asks the
+  // keyframe database for the keyframes that look like the lost frame and matches only features
+  // under the same vocabulary node, instead of matching the frame against every keyframe.
+  // "default": the vocabulary shipped with noctua (place::FindDefaultVocabulary; where it cannot
+  // be found, none, with a warning); "" or "none": no vocabulary; else a vocabulary file.
+  std::string vocabulary = "default";
   // Ceres iterations of the local bundle adjustment; on fr1/rpy 10 stopped short of convergence
   // (ATE 0.032 m) while 15, 20 and 30 all gave the same converged result (0.024 m).
   int local_ba_iterations = 20;
@@ -77,11 +86,16 @@ struct SlamOptions {
   void Check() const;
 };
 
+// The vocabulary SlamOptions::vocabulary names, loaded once per file in a process; nullptr for
+// none. Throws noctua::Error naming the file when a named vocabulary cannot be loaded.
+std::shared_ptr<const place::Vocabulary> LoadSlamVocabulary(const SlamOptions& options);
+
 // Camera and SLAM settings from one ORB-SLAM-style settings file (config/*.yaml): the camera
 // preset (see io::ReadCameraConfig), the pyramid from ORBextractor.scaleFactor / nLevels, and
 // ORB-SLAM's optional Camera.bf (default fx * 0.0773 m, the value of ORB-SLAM's TUM files) and
-// ThDepth (default 40; close depth = ThDepth * bf / fx). Throws noctua::Error naming the file
-// and key for anything missing or invalid.
+// ThDepth (default 40; close depth = ThDepth * bf / fx), and noctua's optional Vocabulary.file
+// (SlamOptions::vocabulary; a relative path is relative to the settings file). Throws noctua::Error
+// naming the file and key for anything missing or invalid.
 struct SlamSetup {
   io::CameraConfig camera;
   SlamOptions options;

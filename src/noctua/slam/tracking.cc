@@ -27,6 +27,7 @@ const char* TrackingStateName(TrackingState state) {
 
 Tracker::Tracker(const SlamOptions& options)
     : options_(options),
+      vocabulary_(LoadSlamVocabulary(options)),
       pyramid_(options.scale_factor, options.num_levels),
       mapper_(options_, pyramid_),
       matcher_(0.9, true, pyramid_, options.bf),
@@ -141,6 +142,9 @@ void Tracker::UseMap(Map map, bool localize) {
   const std::vector<KeyFrame*> keyframes = map.KeyFrames();
   if (keyframes.empty()) throw Error("slam: the map to start from has no keyframe");
   map_ = std::move(map);
+  database_.Clear();
+  database_keyframes_.clear();
+  for (KeyFrame* keyframe : keyframes) AddToDatabase(keyframe);
   reference_ = last_keyframe_ = keyframes.back();
   local_keyframes_ = {last_keyframe_};
   localize_ = localize;
@@ -201,6 +205,7 @@ bool Tracker::Initialise(Frame& frame) {
   reference_ = last_keyframe_ = keyframe;
   last_keyframe_frame_id_ = frame.id;
   local_keyframes_ = {keyframe};
+  AddToDatabase(keyframe);
   return true;
 }
 
@@ -289,87 +294,147 @@ bool Tracker::TrackReferenceKeyFrame() {
   return DiscardOutliers() >= 10;
 }
 
+void Tracker::AddToDatabase(KeyFrame* keyframe) {
+  if (vocabulary_ == nullptr || keyframe->bad()) return;
+  place::FeatureVector features;
+  place::BowVector bow = vocabulary_->Transform(keyframe->features().descriptors(), &features);
+  database_.Add(keyframe->id(), std::move(bow), std::move(features));
+  database_keyframes_[keyframe->id()] = keyframe;
+}
+
+void Tracker::EraseCulledFromDatabase() {
+  for (auto it = database_keyframes_.begin(); it != database_keyframes_.end();) {
+    if (it->second->bad()) {
+      database_.Erase(it->first);
+      it = database_keyframes_.erase(it);
+    } else {
+      ++it;
+    }
+  }
+}
+
+std::vector<std::pair<KeyFrame*, std::vector<MapPoint*>>> Tracker::RelocalisationCandidates() {
+  constexpr int kMinMatches = 15;
+  const Frame& frame = *current_;
+  std::vector<std::pair<KeyFrame*, std::vector<MapPoint*>>> found;
+  std::vector<int> counts;
+  const auto add = [&](KeyFrame* keyframe, std::vector<MapPoint*> matches, int count) {
+    if (count < kMinMatches) return;
+    found.emplace_back(keyframe, std::move(matches));
+    counts.push_back(count);
+  };
+  if (vocabulary_ != nullptr) {
+    place::FeatureVector frame_features;
+    const place::BowVector bow =
+        vocabulary_->Transform(frame.features->descriptors(), &frame_features);
+    const auto covisibles = [this](long id, int count) {
+      std::vector<long> ids;
+      for (const KeyFrame* other : database_keyframes_.at(id)->BestCovisibles(count)) {
+        ids.push_back(other->id());
+      }
+      return ids;
+    };
+    for (const place::PlaceCandidate& candidate :
+         database_.Query(bow, place::DatabaseQueryOptions(), covisibles)) {
+      KeyFrame* keyframe = database_keyframes_.at(candidate.id);
+      if (keyframe->bad()) continue;
+      std::vector<MapPoint*> matches;
+      const int count = strict_matcher_.SearchByFeatureVector(
+          *keyframe, database_.features(candidate.id), frame, frame_features, matches);
+      add(keyframe, std::move(matches), count);
+    }
+  } else {
+    std::vector<KeyFrame*> keyframes = map_.KeyFrames();
+    std::reverse(keyframes.begin(), keyframes.end());
+    for (KeyFrame* keyframe : keyframes) {
+      std::vector<MapPoint*> matches;
+      const int count = strict_matcher_.SearchByDescriptor(*keyframe, frame, matches);
+      add(keyframe, std::move(matches), count);
+    }
+  }
+  std::vector<std::size_t> order(found.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    if (counts[a] != counts[b]) return counts[a] > counts[b];
+    return found[a].first->id() > found[b].first->id();
+  });
+  if (static_cast<int>(order.size()) > options_.relocalisation_candidates) {
+    order.resize(static_cast<std::size_t>(options_.relocalisation_candidates));
+  }
+  std::vector<std::pair<KeyFrame*, std::vector<MapPoint*>>> best;
+  for (std::size_t i : order) best.push_back(std::move(found[i]));
+  return best;
+}
+
 bool Tracker::Relocalise() {
-  Frame& frame = *current_;
-  if (frame.size() < 50) return false;
-  // Candidates: keyframes with the most descriptor matches, most recent first on ties.
-  std::vector<KeyFrame*> keyframes = map_.KeyFrames();
-  std::reverse(keyframes.begin(), keyframes.end());
-  std::vector<std::pair<int, std::size_t>> scored;
-  std::vector<std::vector<MapPoint*>> all_matches(keyframes.size());
-  for (std::size_t k = 0; k < keyframes.size(); ++k) {
-    const int count = strict_matcher_.SearchByDescriptor(*keyframes[k], frame, all_matches[k]);
-    if (count >= 15) scored.emplace_back(count, k);
-  }
-  std::stable_sort(scored.begin(), scored.end(),
-                   [](const auto& a, const auto& b) { return a.first > b.first; });
-  if (static_cast<int>(scored.size()) > options_.relocalisation_candidates) {
-    scored.resize(static_cast<std::size_t>(options_.relocalisation_candidates));
-  }
-  const cv::Mat K = frame.features->camera().K();
-  for (const auto& [count, k] : scored) {
-    const std::vector<MapPoint*>& matches = all_matches[k];
-    std::vector<cv::Point3f> object;
-    std::vector<cv::Point2f> image;
-    std::vector<int> indices;
-    for (int i = 0; i < frame.size(); ++i) {
-      MapPoint* point = matches[static_cast<std::size_t>(i)];
-      if (point == nullptr || point->bad()) continue;
-      const Eigen::Vector3d& x = point->position();
-      object.emplace_back(static_cast<float>(x.x()), static_cast<float>(x.y()),
-                          static_cast<float>(x.z()));
-      const Eigen::Vector2d& u = frame.features->undistorted(i);
-      image.emplace_back(static_cast<float>(u.x()), static_cast<float>(u.y()));
-      indices.push_back(i);
-    }
-    if (object.size() < 15) continue;
-    cv::Mat rvec, tvec;
-    std::vector<int> inliers;
-    // A fixed seed state keeps RANSAC, and so the whole run, deterministic.
-    cv::theRNG().state = 0x12345678ULL + static_cast<std::uint64_t>(frame.id);
-    if (!cv::solvePnPRansac(object, image, K, cv::noArray(), rvec, tvec, false, 200, 4.0f, 0.99,
-                            inliers, cv::SOLVEPNP_EPNP) ||
-        inliers.size() < 10) {
-      continue;
-    }
-    cv::Mat rotation;
-    cv::Rodrigues(rvec, rotation);
-    Eigen::Matrix3d r;
-    cv::cv2eigen(rotation, r);
-    frame.pose_cw = geometry::Pose::Identity();
-    frame.pose_cw.linear() = r;
-    frame.pose_cw.translation() =
-        Eigen::Vector3d(tvec.at<double>(0), tvec.at<double>(1), tvec.at<double>(2));
-    std::fill(frame.map_points.begin(), frame.map_points.end(), nullptr);
-    for (int inlier : inliers) {
-      const int i = indices[static_cast<std::size_t>(inlier)];
-      frame.map_points[static_cast<std::size_t>(i)] = matches[static_cast<std::size_t>(i)];
-    }
-    int good = OptimizePose(frame, pyramid_, options_.bf);
-    if (good < 10) continue;
-    for (std::size_t i = 0; i < frame.map_points.size(); ++i) {
-      if (frame.outlier[i]) frame.map_points[i] = nullptr;
-    }
-    if (good < options_.min_inliers_after_relocalisation) {
-      std::vector<MapPoint*> found;
-      for (MapPoint* point : frame.map_points) {
-        if (point != nullptr) found.push_back(point);
-      }
-      const int more = strict_matcher_.SearchByProjection(frame, *keyframes[k], found, 10.0, 100);
-      if (good + more >= options_.min_inliers_after_relocalisation) {
-        good = OptimizePose(frame, pyramid_, options_.bf);
-        for (std::size_t i = 0; i < frame.map_points.size(); ++i) {
-          if (frame.outlier[i]) frame.map_points[i] = nullptr;
-        }
-      }
-    }
-    if (good >= options_.min_inliers_after_relocalisation) {
-      last_relocalisation_frame_id_ = frame.id;
-      reference_ = keyframes[k];
-      return true;
-    }
+  if (current_->size() < 50) return false;
+  for (const auto& [keyframe, matches] : RelocalisationCandidates()) {
+    if (RelocaliseWith(keyframe, matches)) return true;
   }
   return false;
+}
+
+bool Tracker::RelocaliseWith(KeyFrame* keyframe, const std::vector<MapPoint*>& matches) {
+  Frame& frame = *current_;
+  const cv::Mat K = frame.features->camera().K();
+  std::vector<cv::Point3f> object;
+  std::vector<cv::Point2f> image;
+  std::vector<int> indices;
+  for (int i = 0; i < frame.size(); ++i) {
+    MapPoint* point = matches[static_cast<std::size_t>(i)];
+    if (point == nullptr || point->bad()) continue;
+    const Eigen::Vector3d& x = point->position();
+    object.emplace_back(static_cast<float>(x.x()), static_cast<float>(x.y()),
+                        static_cast<float>(x.z()));
+    const Eigen::Vector2d& u = frame.features->undistorted(i);
+    image.emplace_back(static_cast<float>(u.x()), static_cast<float>(u.y()));
+    indices.push_back(i);
+  }
+  if (object.size() < 15) return false;
+  cv::Mat rvec, tvec;
+  std::vector<int> inliers;
+  // A fixed seed state keeps RANSAC, and so the whole run, deterministic.
+  cv::theRNG().state = 0x12345678ULL + static_cast<std::uint64_t>(frame.id);
+  if (!cv::solvePnPRansac(object, image, K, cv::noArray(), rvec, tvec, false, 200, 4.0f, 0.99,
+                          inliers, cv::SOLVEPNP_EPNP) ||
+      inliers.size() < 10) {
+    return false;
+  }
+  cv::Mat rotation;
+  cv::Rodrigues(rvec, rotation);
+  Eigen::Matrix3d r;
+  cv::cv2eigen(rotation, r);
+  frame.pose_cw = geometry::Pose::Identity();
+  frame.pose_cw.linear() = r;
+  frame.pose_cw.translation() =
+      Eigen::Vector3d(tvec.at<double>(0), tvec.at<double>(1), tvec.at<double>(2));
+  std::fill(frame.map_points.begin(), frame.map_points.end(), nullptr);
+  for (int inlier : inliers) {
+    const int i = indices[static_cast<std::size_t>(inlier)];
+    frame.map_points[static_cast<std::size_t>(i)] = matches[static_cast<std::size_t>(i)];
+  }
+  int good = OptimizePose(frame, pyramid_, options_.bf);
+  if (good < 10) return false;
+  for (std::size_t i = 0; i < frame.map_points.size(); ++i) {
+    if (frame.outlier[i]) frame.map_points[i] = nullptr;
+  }
+  if (good < options_.min_inliers_after_relocalisation) {
+    std::vector<MapPoint*> found;
+    for (MapPoint* point : frame.map_points) {
+      if (point != nullptr) found.push_back(point);
+    }
+    const int more = strict_matcher_.SearchByProjection(frame, *keyframe, found, 10.0, 100);
+    if (good + more >= options_.min_inliers_after_relocalisation) {
+      good = OptimizePose(frame, pyramid_, options_.bf);
+      for (std::size_t i = 0; i < frame.map_points.size(); ++i) {
+        if (frame.outlier[i]) frame.map_points[i] = nullptr;
+      }
+    }
+  }
+  if (good < options_.min_inliers_after_relocalisation) return false;
+  last_relocalisation_frame_id_ = frame.id;
+  reference_ = keyframe;
+  return true;
 }
 
 bool Tracker::InFrustum(MapPoint* point, double min_view_cos) const {
@@ -615,6 +680,8 @@ void Tracker::CreateNewKeyFrame() {
     }
   }
   mapper_.ProcessKeyFrame(keyframe);
+  EraseCulledFromDatabase();
+  AddToDatabase(keyframe);
   reference_ = last_keyframe_ = keyframe;
   last_keyframe_frame_id_ = frame.id;
   // Local bundle adjustment moved the keyframe: the frame keeps its pose relative to it.

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "noctua/place/keyframe_database.h"
 #include "noctua/slam/frame.h"
 #include "noctua/slam/local_mapping.h"
 #include "noctua/slam/map.h"
@@ -75,6 +76,10 @@ class Tracker {
   bool localize() const { return localize_; }
 
   const Map& map() const { return map_; }
+  // The vocabulary in use (SlamOptions::vocabulary), nullptr for none, and the keyframe database
+  // of the map's good keyframes (empty without a vocabulary).
+  const place::Vocabulary* vocabulary() const { return vocabulary_.get(); }
+  const place::KeyFrameDatabase& keyframe_database() const { return database_; }
   const std::vector<FrameRecord>& records() const { return records_; }
   TrackingState state() const { return state_; }
 
@@ -83,6 +88,15 @@ class Tracker {
   bool TrackWithMotionModel();
   bool TrackReferenceKeyFrame();
   bool Relocalise();
+  // Relocalisation candidates: keyframes with their descriptor matches to the current frame (at
+  // least 15), most matches first (ties: the more recent keyframe), at most
+  // relocalisation_candidates. With a vocabulary, only the keyframes the database finds are
+  // matched, by the direct index; without, every keyframe, by brute force.
+  std::vector<std::pair<KeyFrame*, std::vector<MapPoint*>>> RelocalisationCandidates();
+  bool RelocaliseWith(KeyFrame* keyframe, const std::vector<MapPoint*>& matches);
+  void AddToDatabase(KeyFrame* keyframe);
+  // Takes the keyframes culled since the last call out of the database.
+  void EraseCulledFromDatabase();
   bool TrackLocalMap();
   void UpdateLastFrame();
   void UpdateLocalMap();
@@ -102,6 +116,9 @@ class Tracker {
   void ReclaimMapPoints();
 
   SlamOptions options_;
+  std::shared_ptr<const place::Vocabulary> vocabulary_;
+  place::KeyFrameDatabase database_;
+  std::map<long, KeyFrame*> database_keyframes_;  // the keyframes in database_, by id
   ScalePyramid pyramid_;
   Map map_;
   LocalMapper mapper_;
