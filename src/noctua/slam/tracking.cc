@@ -614,7 +614,7 @@ void Tracker::CreateNewKeyFrame() {
       keyframe->SetMapPoint(i, point);
     }
   }
-  mapper_.ProcessKeyFrame(keyframe);
+  mapper_.ProcessKeyFrame(keyframe, map_);
   reference_ = last_keyframe_ = keyframe;
   last_keyframe_frame_id_ = frame.id;
   // Local bundle adjustment moved the keyframe: the frame keeps its pose relative to it.

@@ -75,6 +75,7 @@ class Tracker {
   bool localize() const { return localize_; }
 
   const Map& map() const { return map_; }
+  const LocalMapper& mapper() const { return mapper_; }
   const std::vector<FrameRecord>& records() const { return records_; }
   TrackingState state() const { return state_; }
 
