@@ -1,6 +1,9 @@
 #pragma once
 
+#include <Eigen/Core>
 #include <list>
+#include <optional>
+#include <vector>
 
 #include "noctua/slam/map.h"
 #include "noctua/slam/slam_options.h"
@@ -9,19 +12,41 @@ namespace noctua::slam {
 
 // Integrates each new keyframe into the map, in the tracking thread so that a run is
 // deterministic: observations and covisibility, culling of new points that are rarely matched,
-// local bundle adjustment, culling of redundant keyframes (ORB-SLAM's LocalMapping, without
-// triangulation of new points between keyframes: RGB-D points come from depth).
+// triangulation of new points between keyframes for keypoints without usable depth, local bundle
+// adjustment, culling of redundant keyframes (ORB-SLAM's LocalMapping).
 class LocalMapper {
  public:
   LocalMapper(const SlamOptions& options, const ScalePyramid& pyramid)
       : options_(options), pyramid_(pyramid) {}
 
-  void ProcessKeyFrame(KeyFrame* keyframe);
+  // `map` receives the points triangulated with the keyframe.
+  void ProcessKeyFrame(KeyFrame* keyframe, Map& map);
   // New points still on probation (culled if rarely matched): the mapper holds them.
   const std::list<MapPoint*>& recent_points() const { return recent_points_; }
+  // Points made by triangulation so far, whether culled since or not.
+  long triangulated_points() const { return static_cast<long>(triangulated_point_ids_.size()); }
+  // Whether the point of this id was made by triangulation.
+  bool Triangulated(long point_id) const;
+  // Good points of `map` that were made by triangulation.
+  int CountTriangulated(const Map& map) const;
+  // ORB-SLAM's CreateNewMapPoints: matches the keyframe's keypoints that have no map point and no
+  // depth within close_depth_m with those of its best covisible keyframes, along epipolar lines,
+  // and triangulates the pairs that pass the parallax, depth, reprojection and scale checks
+  // (SlamOptions::triangulation). The new points join the recent points on probation. Returns
+  // how many were made.
+  int CreateTriangulatedPoints(KeyFrame* keyframe, Map& map);
 
  private:
   void CullRecentPoints(const KeyFrame* keyframe);
+  // The world position of keypoint i of `first` and j of `second` when it passes the parallax,
+  // positive depth, reprojection and scale checks; `k` the intrinsics, `baseline` the virtual
+  // stereo baseline (bf / fx).
+  std::optional<Eigen::Vector3d> TriangulatePair(const KeyFrame& first, int i,
+                                                 const KeyFrame& second, int j,
+                                                 const Eigen::Matrix3d& k, double baseline) const;
+  // Positive depth and reprojection error within the chi-square bound of the keypoint's level
+  // (2 dof, 5.991, or 3 dof, 7.815, with the right coordinate where the keypoint has depth).
+  bool ReprojectsWell(const KeyFrame& keyframe, int index, const Eigen::Vector3d& position) const;
   void CullRedundantKeyFrames(KeyFrame* keyframe);
   // ORB-SLAM's SearchInNeighbors: fuses the keyframe's points with those of its neighbours
   // (duplicates merged, missing observations added), so points gather all their observations.
@@ -32,6 +57,7 @@ class LocalMapper {
   const SlamOptions& options_;
   const ScalePyramid& pyramid_;
   std::list<MapPoint*> recent_points_;
+  std::vector<long> triangulated_point_ids_;  // increasing, as the map gives them
 };
 
 }  // namespace noctua::slam

@@ -1,5 +1,6 @@
 #include "noctua/slam/matcher.h"
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -9,6 +10,9 @@ namespace noctua::slam {
 namespace {
 
 constexpr int kHistogramBins = 30;
+
+// Chi-square bound of one degree of freedom at 95 %: a point's distance to its epipolar line.
+constexpr double kChi2OneDof = 3.84;
 
 // Radius multiplier by viewing angle (ORB-SLAM: tighter when seen from the same direction).
 double RadiusByViewingCos(double view_cos) { return view_cos > 0.998 ? 2.5 : 4.0; }
@@ -305,6 +309,70 @@ int Matcher::CollectMatches(const KeyFrame& keyframe, const Frame& frame,
     ++count;
   }
   return count;
+}
+
+std::vector<std::pair<int, int>> Matcher::SearchForTriangulation(
+    const KeyFrame& first, const KeyFrame& second, const Eigen::Matrix3d& fundamental_21,
+    const std::vector<bool>& first_candidate, const std::vector<bool>& second_candidate) const {
+  const FrameFeatures& features1 = first.features();
+  const FrameFeatures& features2 = second.features();
+  // The epipole: the first camera's centre seen from the second.
+  const Eigen::Vector3d centre1_in2 = second.pose_cw() * first.CameraCentre();
+  const Eigen::Vector2d epipole = features2.camera().Project(centre1_in2);
+  const bool epipole_in_front = centre1_in2.z() > 0.0;
+  std::vector<int> best_first(static_cast<std::size_t>(features2.size()), -1);
+  std::vector<int> best_distance(static_cast<std::size_t>(features2.size()), 256);
+  for (int i = 0; i < features1.size(); ++i) {
+    if (!first_candidate[static_cast<std::size_t>(i)]) continue;
+    const Eigen::Vector3d line = fundamental_21 * features1.undistorted(i).homogeneous();
+    const double line_norm2 = line.head<2>().squaredNorm();
+    if (line_norm2 <= 0.0) continue;
+    const bool depth1 = features1.depth(i) > 0.0;
+    int best = 256, second_best = 256, best_index = -1;
+    for (int j = 0; j < features2.size(); ++j) {
+      if (!second_candidate[static_cast<std::size_t>(j)]) continue;
+      const Eigen::Vector2d& x2 = features2.undistorted(j);
+      const int level = features2.octave(j);
+      const double sigma2 = 1.0 / pyramid_.inverse_sigma2[static_cast<std::size_t>(level)];
+      const double along = line.dot(x2.homogeneous());
+      if (along * along / line_norm2 >= kChi2OneDof * sigma2) continue;
+      if (!depth1 && features2.depth(j) <= 0.0 && epipole_in_front &&
+          (x2 - epipole).squaredNorm() < 100.0 * pyramid_.scale[static_cast<std::size_t>(level)]) {
+        continue;  // ORB-SLAM: near the epipole, rays from both cameras are nearly parallel
+      }
+      const int distance = DescriptorDistance(features1.descriptor(i), features2.descriptor(j));
+      if (distance < best) {
+        second_best = best;
+        best = distance;
+        best_index = j;
+      } else if (distance < second_best) {
+        second_best = distance;
+      }
+    }
+    if (best_index < 0 || best > kThresholdLow) continue;
+    if (static_cast<double>(best) >= ratio_ * static_cast<double>(second_best)) continue;
+    const auto j = static_cast<std::size_t>(best_index);
+    if (best < best_distance[j]) {
+      best_distance[j] = best;
+      best_first[j] = i;
+    }
+  }
+  std::vector<std::pair<int, int>> pairs;
+  std::vector<float> angle_changes;
+  for (int j = 0; j < features2.size(); ++j) {
+    const int i = best_first[static_cast<std::size_t>(j)];
+    if (i < 0) continue;
+    pairs.emplace_back(i, j);
+    angle_changes.push_back(features1.keypoint(i).angle - features2.keypoint(j).angle);
+  }
+  std::vector<int> kept(pairs.size(), 0);
+  KeepConsistentRotation(angle_changes, kept);
+  std::vector<std::pair<int, int>> result;
+  for (std::size_t k = 0; k < pairs.size(); ++k) {
+    if (kept[k] >= 0) result.push_back(pairs[k]);
+  }
+  std::sort(result.begin(), result.end());
+  return result;
 }
 
 }  // namespace noctua::slam

@@ -1,5 +1,7 @@
 #pragma once
 
+#include <Eigen/Core>
+#include <utility>
 #include <vector>
 
 #include "noctua/place/vocabulary.h"
@@ -41,6 +43,19 @@ class Matcher {
   int SearchByFeatureVector(const KeyFrame& keyframe, const place::FeatureVector& keyframe_features,
                             const Frame& frame, const place::FeatureVector& frame_features,
                             std::vector<MapPoint*>& matches) const;
+
+  // Pairs of keypoints of two keyframes to triangulate (ORB-SLAM's SearchForTriangulation, by
+  // brute force in place of bag of words): keypoint i of `first` is a candidate where
+  // first_candidate[i], one of `second` where second_candidate[j]. A pair must lie within the
+  // epipolar bound (chi-square 1 dof 95 %, 3.84, times the sigma^2 of the second keypoint's level)
+  // of the line that `fundamental_21` (x2' F x1 = 0, undistorted pixels) draws in `second`, and,
+  // where neither keypoint has depth, keep the second keypoint away from the epipole; the best
+  // distance must be at most kThresholdLow and below ratio times the second best; each keypoint
+  // of `second` keeps its best pair, and the pairs must agree on rotation. Returns (i, j) pairs
+  // in order of i.
+  std::vector<std::pair<int, int>> SearchForTriangulation(
+      const KeyFrame& first, const KeyFrame& second, const Eigen::Matrix3d& fundamental_21,
+      const std::vector<bool>& first_candidate, const std::vector<bool>& second_candidate) const;
 
  private:
   // Keeps only matches whose angle change falls in the three most common 12-degree bins.

@@ -44,8 +44,13 @@ RgbdSlam::Extracted RgbdSlam::Extract(const cv::Mat& image, const cv::Mat& depth
   cv::Mat descriptors;
   extractor_->detectAndCompute(image, cv::noArray(), keypoints, descriptors);
   Extracted extracted;
+  cv::Mat depth = depth_m;
+  if (options_.max_depth_m > 0.0) {
+    depth = depth_m.clone();
+    depth.setTo(0.0f, depth_m > options_.max_depth_m);
+  }
   extracted.features = std::make_shared<const FrameFeatures>(
-      std::move(keypoints), descriptors, depth_m, camera_, options_.bf, options_.min_depth_m);
+      std::move(keypoints), descriptors, depth, camera_, options_.bf, options_.min_depth_m);
   extracted.timestamp = timestamp;
   extracted.extract_ms = watch.ElapsedMs();
   if (segmenter_ != nullptr) {

@@ -3,11 +3,23 @@
 #include <spdlog/spdlog.h>
 
 #include <atomic>
+#include <set>
+#include <string>
 
 #include "noctua/io/yaml_file.h"
 #include "noctua/util/error.h"
 
 namespace noctua::slam {
+
+void TriangulationOptions::Check() const {
+  CheckOption(covisibles >= 1, "slam: triangulation covisibles must be at least 1");
+  CheckOption(min_baseline_ratio >= 0.0, "slam: triangulation min_baseline_ratio must be >= 0");
+  CheckOption(max_parallax_cos > 0.0 && max_parallax_cos < 1.0,
+              "slam: triangulation max_parallax_cos must be in (0, 1)");
+  CheckOption(match_ratio > 0.0 && match_ratio <= 1.0,
+              "slam: triangulation match_ratio must be in (0, 1]");
+  CheckOption(scale_consistency >= 1.0, "slam: triangulation scale_consistency must be >= 1");
+}
 
 void SlamOptions::Check() const {
   CheckOption(scale_factor > 1.0, "slam: scale_factor must be greater than 1");
@@ -15,6 +27,8 @@ void SlamOptions::Check() const {
   CheckOption(bf > 0.0, "slam: bf (baseline times fx) must be positive");
   CheckOption(close_depth_m > 0.0, "slam: close_depth_m must be positive");
   CheckOption(min_depth_m >= 0.0, "slam: min_depth_m must not be negative");
+  CheckOption(max_depth_m == 0.0 || max_depth_m > min_depth_m,
+              "slam: max_depth_m must be 0 (no limit) or greater than min_depth_m");
   CheckOption(min_initial_points >= 10, "slam: min_initial_points must be at least 10");
   CheckOption(min_tracked_inliers >= 10, "slam: min_tracked_inliers must be at least 10");
   CheckOption(min_certain_inliers >= 6 && min_certain_inliers <= min_tracked_inliers,
@@ -31,6 +45,7 @@ void SlamOptions::Check() const {
   CheckOption(local_ba_max_covisibles >= 0, "slam: local_ba_max_covisibles must be >= 0");
   CheckOption(keyframe_redundancy > 0.0 && keyframe_redundancy <= 1.0,
               "slam: keyframe_redundancy must be in (0, 1]");
+  triangulation.Check();
   moving.Check();
   CheckOption(moving_frames_to_cull >= 1, "slam: moving_frames_to_cull must be at least 1");
 }
@@ -51,6 +66,30 @@ std::shared_ptr<const place::Vocabulary> LoadSlamVocabulary(const SlamOptions& o
   return place::LoadVocabularyShared(path);
 }
 
+namespace {
+
+// noctua's own `slam:` settings (ORB-SLAM's files have none of these).
+void ReadSlamSection(const YAML::Node& root, const std::string& source, SlamOptions& options) {
+  const YAML::Node section = root["slam"];
+  if (!section.IsDefined() || section.IsNull()) return;
+  if (!section.IsMap()) {
+    ThrowLineError(source, section.Mark().line + 1, "'slam' must be a map of settings");
+  }
+  static const std::set<std::string> kKnown = {"triangulate", "triangulation_covisibles",
+                                               "max_depth_m"};
+  for (const auto& entry : section) {
+    const auto key = entry.first.as<std::string>();
+    if (!kKnown.contains(key)) {
+      ThrowLineError(source, entry.first.Mark().line + 1, "unknown setting 'slam." + key + "'");
+    }
+  }
+  io::ReadSetting(section, "triangulate", source, options.triangulation.enabled);
+  io::ReadSetting(section, "triangulation_covisibles", source, options.triangulation.covisibles);
+  io::ReadSetting(section, "max_depth_m", source, options.max_depth_m);
+}
+
+}  // namespace
+
 SlamSetup LoadSlamSetup(const std::filesystem::path& path) {
   SlamSetup setup;
   setup.camera = io::ReadCameraConfig(path);
@@ -70,6 +109,7 @@ SlamSetup LoadSlamSetup(const std::filesystem::path& path) {
       options.vocabulary = (path.parent_path() / options.vocabulary).string();
     }
   }
+  ReadSlamSection(root, path.string(), options);
   try {
     options.Check();
   } catch (const Error& error) {

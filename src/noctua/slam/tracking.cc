@@ -679,7 +679,7 @@ void Tracker::CreateNewKeyFrame() {
       keyframe->SetMapPoint(i, point);
     }
   }
-  mapper_.ProcessKeyFrame(keyframe);
+  mapper_.ProcessKeyFrame(keyframe, map_);
   EraseCulledFromDatabase();
   AddToDatabase(keyframe);
   reference_ = last_keyframe_ = keyframe;

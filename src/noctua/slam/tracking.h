@@ -80,6 +80,7 @@ class Tracker {
   // of the map's good keyframes (empty without a vocabulary).
   const place::Vocabulary* vocabulary() const { return vocabulary_.get(); }
   const place::KeyFrameDatabase& keyframe_database() const { return database_; }
+  const LocalMapper& mapper() const { return mapper_; }
   const std::vector<FrameRecord>& records() const { return records_; }
   TrackingState state() const { return state_; }
 
