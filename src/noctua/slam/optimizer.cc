@@ -66,6 +66,20 @@ ceres::Solver::Options SolverOptions(int iterations, ceres::LinearSolverType sol
   return options;
 }
 
+// (centre - predicted) / sigma, where the centre of pose_cw = (q, t) is -R(q)ᵀ t.
+struct CentrePriorCost {
+  Eigen::Vector3d centre;
+  double inverse_sigma;
+  template <typename T>
+  bool operator()(const T* rotation, const T* translation, T* residual) const {
+    const Eigen::Quaternion<T> q(rotation[3], rotation[0], rotation[1], rotation[2]);
+    const Eigen::Matrix<T, 3, 1> t(translation[0], translation[1], translation[2]);
+    const Eigen::Matrix<T, 3, 1> c = -(q.conjugate() * t);
+    for (int i = 0; i < 3; ++i) residual[i] = (c[i] - T(centre[i])) * T(inverse_sigma);
+    return true;
+  }
+};
+
 }  // namespace
 
 PoseUncertainty EstimatePoseUncertainty(const Frame& frame, const ScalePyramid& pyramid,
@@ -115,7 +129,7 @@ PoseUncertainty EstimatePoseUncertainty(const Frame& frame, const ScalePyramid& 
   return uncertainty;
 }
 
-int OptimizePose(Frame& frame, const ScalePyramid& pyramid, double bf) {
+int OptimizePose(Frame& frame, const ScalePyramid& pyramid, double bf, const CentrePrior* prior) {
   const FrameFeatures& features = *frame.features;
   const Intrinsics k = IntrinsicsOf(features, bf);
   std::vector<int> matched;
@@ -156,6 +170,11 @@ int OptimizePose(Frame& frame, const ScalePyramid& pyramid, double bf) {
       ++residual_blocks;
     }
     if (residual_blocks < 3) break;
+    if (prior != nullptr && prior->sigma_m > 0.0) {
+      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<CentrePriorCost, 3, 4, 3>(
+                                   new CentrePriorCost{prior->centre, 1.0 / prior->sigma_m}),
+                               nullptr, block.rotation.data(), block.translation.data());
+    }
     ceres::Solver::Summary summary;
     ceres::Solve(SolverOptions(10, ceres::DENSE_QR), &problem, &summary);
     estimate = block.ToPose();

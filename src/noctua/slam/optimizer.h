@@ -17,7 +17,15 @@ inline constexpr double kChi2Stereo = 7.815;
 // Four rounds; after each, matches whose χ² exceeds the threshold are flagged outliers and left
 // out of the next round, and earlier outliers that fit again come back (ORB-SLAM's scheme; the
 // last round is without the robust loss). Returns the number of inliers.
-int OptimizePose(Frame& frame, const ScalePyramid& pyramid, double bf);
+// A prediction of where the camera centre is, with its standard deviation: with one,
+// OptimizePose also weighs the residual (centre - predicted) / sigma_m, so a frame whose matches
+// fix its pose weakly stays near where the camera can physically be.
+struct CentrePrior {
+  Eigen::Vector3d centre;  // in the world
+  double sigma_m = 0.0;
+};
+int OptimizePose(Frame& frame, const ScalePyramid& pyramid, double bf,
+                 const CentrePrior* prior = nullptr);
 
 // How well a tracked pose is determined by its inlier matches: the marginal standard deviations
 // of the camera's position and orientation, from the Gauss-Newton information J^T J of the

@@ -90,3 +90,69 @@ TEST_F(UncertaintyTest, TooFewPointsLeaveThePoseUndetermined) {
 
 }  // namespace
 }  // namespace noctua::slam
+
+namespace noctua::slam {
+namespace {
+
+// A frame whose keypoints are the exact projections (no depth) of 3 x 3 points on a wall 2 m in
+// front of the world origin, every one matched to its map point.
+class CentrePriorTest : public ::testing::Test {
+ protected:
+  Frame MakeFrame() {
+    geometry::Intrinsics intrinsics;
+    intrinsics.fx = intrinsics.fy = 500.0;
+    intrinsics.cx = 320.0;
+    intrinsics.cy = 240.0;
+    intrinsics.width = 640;
+    intrinsics.height = 480;
+    const geometry::PinholeCamera camera(intrinsics, geometry::Distortion{});
+    std::vector<Eigen::Vector3d> positions;
+    std::vector<cv::KeyPoint> keypoints;
+    for (int i = -1; i <= 1; ++i) {
+      for (int j = -1; j <= 1; ++j) {
+        positions.emplace_back(0.5 * i, 0.4 * j, 2.0 + 0.2 * ((i + j + 2) % 3));
+        const Eigen::Vector3d& p = positions.back();
+        keypoints.emplace_back(static_cast<float>(500.0 * p.x() / p.z() + 320.0),
+                               static_cast<float>(500.0 * p.y() / p.z() + 240.0), 31.0f);
+      }
+    }
+    const cv::Mat descriptors(static_cast<int>(positions.size()), 32, CV_8U, cv::Scalar(0));
+    const cv::Mat depth(480, 640, CV_32F, cv::Scalar(0.0f));
+    auto features =
+        std::make_shared<const FrameFeatures>(keypoints, descriptors, depth, camera, 40.0, 0.1);
+    Frame frame(0, 0.0, features);
+    KeyFrame* keyframe = map_.AddKeyFrame(frame);
+    for (std::size_t i = 0; i < positions.size(); ++i) {
+      frame.map_points[i] = map_.AddMapPoint(positions[i], keyframe);
+    }
+    // Start 2 cm off the true pose (the identity).
+    frame.pose_cw = geometry::Pose::Identity();
+    frame.pose_cw.translation() = Eigen::Vector3d(0.02, -0.01, 0.02);
+    return frame;
+  }
+
+  Map map_;
+  const ScalePyramid pyramid_{1.2, 8};
+};
+
+TEST_F(CentrePriorTest, AWideOneChangesNothingAndANarrowOneHoldsTheCentre) {
+  Frame free = MakeFrame();
+  ASSERT_EQ(OptimizePose(free, pyramid_, 40.0), 9);
+  EXPECT_LT(free.pose_cw.translation().norm(), 1e-4);  // the exact projections' pose
+
+  // A prior 100 m wide is no information: the same pose.
+  Frame wide = MakeFrame();
+  const CentrePrior far_and_wide{Eigen::Vector3d(0.05, 0.0, 0.0), 100.0};
+  OptimizePose(wide, pyramid_, 40.0, &far_and_wide);
+  EXPECT_LT((wide.pose_cw.translation() - free.pose_cw.translation()).norm(), 1e-4);
+
+  // A prior 0.1 mm wide 1 cm to the side outweighs nine points: the centre stays near it.
+  Frame narrow = MakeFrame();
+  const CentrePrior beside{Eigen::Vector3d(0.01, 0.0, 0.0), 1e-4};
+  OptimizePose(narrow, pyramid_, 40.0, &beside);
+  const Eigen::Vector3d centre = narrow.pose_cw.inverse().translation();
+  EXPECT_LT((centre - beside.centre).norm(), 2e-3);
+}
+
+}  // namespace
+}  // namespace noctua::slam

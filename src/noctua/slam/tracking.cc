@@ -243,6 +243,27 @@ void Tracker::UpdateLastFrame() {
   }
 }
 
+std::optional<CentrePrior> Tracker::MotionPrior() const {
+  const double acceleration = options_.motion_prior_acceleration_mps2;
+  constexpr std::size_t kSettledFrames = 5;
+  if (acceleration <= 0.0 || !velocity_.has_value() || last_ == nullptr ||
+      last_->id != current_->id - 1 || recent_uncertainty_.size() < kSettledFrames) {
+    return {};
+  }
+  const double dt = current_->timestamp - last_->timestamp;
+  if (dt <= 0.0) return {};
+  // Constant velocity misses by half the acceleration times dt², and carries the error of the
+  // poses it extrapolates: the median σ of the recent frames.
+  std::vector<double> sigmas;
+  for (const PoseUncertainty& u : recent_uncertainty_) sigmas.push_back(u.position_sigma_m);
+  const auto middle = sigmas.begin() + static_cast<std::ptrdiff_t>(sigmas.size() / 2);
+  std::nth_element(sigmas.begin(), middle, sigmas.end());
+  if (!std::isfinite(*middle)) return {};
+  const geometry::Pose predicted = *velocity_ * last_->pose_cw;
+  return CentrePrior{predicted.inverse().translation(),
+                     std::hypot(0.5 * acceleration * dt * dt, *middle)};
+}
+
 bool Tracker::TrackWithMotionModel() {
   UpdateLastFrame();
   Frame& frame = *current_;
@@ -534,7 +555,8 @@ bool Tracker::TrackLocalMap() {
   SearchLocalPoints();
   Frame& frame = *current_;
   RejectMovingMatches(true);
-  OptimizePose(frame, pyramid_, options_.bf);
+  const std::optional<CentrePrior> prior = MotionPrior();
+  OptimizePose(frame, pyramid_, options_.bf, prior ? &*prior : nullptr);
   inliers_ = 0;
   odometry_inliers_ = 0;
   for (std::size_t i = 0; i < frame.map_points.size(); ++i) {

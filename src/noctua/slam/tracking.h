@@ -105,6 +105,9 @@ class Tracker {
   bool InFrustum(MapPoint* point, double min_view_cos) const;
   bool NeedNewKeyFrame() const;
   bool AsCertainAsRecentFrames() const;
+  // Where the camera should be if it kept its velocity (SlamOptions::motion_prior_*); none
+  // without a velocity or before the pose's usual certainty is known.
+  std::optional<CentrePrior> MotionPrior() const;
   bool Coast(TrackResult& result);
   void CreateNewKeyFrame();
   int DiscardOutliers();
