@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "noctua/slam/map.h"
+#include "noctua/testing/test_camera.h"
 #include "noctua/util/error.h"
 
 namespace noctua::slam {
@@ -15,15 +16,7 @@ namespace {
 
 constexpr double kBf = 40.0;
 
-geometry::PinholeCamera TestCamera() {
-  geometry::Intrinsics intrinsics;
-  intrinsics.fx = intrinsics.fy = 500.0;
-  intrinsics.cx = 320.0;
-  intrinsics.cy = 240.0;
-  intrinsics.width = 640;
-  intrinsics.height = 480;
-  return geometry::PinholeCamera(intrinsics, geometry::Distortion{});
-}
+using testing::TestCamera;
 
 // One scene point: where it is, whether each keyframe reads a depth for it, and whether it is
 // already a map point (from depth) observed by both keyframes.

@@ -5,6 +5,8 @@
 #include <memory>
 #include <vector>
 
+#include "noctua/testing/test_camera.h"
+
 namespace noctua::slam {
 namespace {
 
@@ -12,13 +14,7 @@ namespace {
 class MapReclaimTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    geometry::Intrinsics intrinsics;
-    intrinsics.fx = intrinsics.fy = 500.0;
-    intrinsics.cx = 320.0;
-    intrinsics.cy = 240.0;
-    intrinsics.width = 640;
-    intrinsics.height = 480;
-    const geometry::PinholeCamera camera(intrinsics, geometry::Distortion{});
+    const geometry::PinholeCamera camera = testing::TestCamera();
     std::vector<cv::KeyPoint> keypoints;
     for (int i = 0; i < kPoints; ++i) keypoints.emplace_back(100.0f + 50.0f * i, 200.0f, 31.0f);
     const cv::Mat descriptors(kPoints, 32, CV_8U, cv::Scalar(0));

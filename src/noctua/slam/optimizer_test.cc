@@ -6,6 +6,8 @@
 #include <memory>
 #include <vector>
 
+#include "noctua/testing/test_camera.h"
+
 namespace noctua::slam {
 namespace {
 
@@ -14,13 +16,7 @@ namespace {
 class UncertaintyTest : public ::testing::Test {
  protected:
   double PositionSigma(const std::vector<Eigen::Vector3d>& positions, bool with_depth = true) {
-    geometry::Intrinsics intrinsics;
-    intrinsics.fx = intrinsics.fy = 500.0;
-    intrinsics.cx = 320.0;
-    intrinsics.cy = 240.0;
-    intrinsics.width = 640;
-    intrinsics.height = 480;
-    const geometry::PinholeCamera camera(intrinsics, geometry::Distortion{});
+    const geometry::PinholeCamera camera = testing::TestCamera();
     std::vector<cv::KeyPoint> keypoints;
     cv::Mat depth(480, 640, CV_32F, cv::Scalar(0.0f));
     for (const Eigen::Vector3d& p : positions) {
@@ -99,13 +95,7 @@ namespace {
 class CentrePriorTest : public ::testing::Test {
  protected:
   Frame MakeFrame() {
-    geometry::Intrinsics intrinsics;
-    intrinsics.fx = intrinsics.fy = 500.0;
-    intrinsics.cx = 320.0;
-    intrinsics.cy = 240.0;
-    intrinsics.width = 640;
-    intrinsics.height = 480;
-    const geometry::PinholeCamera camera(intrinsics, geometry::Distortion{});
+    const geometry::PinholeCamera camera = testing::TestCamera();
     std::vector<Eigen::Vector3d> positions;
     std::vector<cv::KeyPoint> keypoints;
     for (int i = -1; i <= 1; ++i) {
