@@ -11,28 +11,36 @@
 namespace noctua::slam {
 namespace {
 
+// A frame at the world origin whose keypoints are the exact projections through
+// testing::TestCamera of `positions` (each with its depth when `with_depth`), every keypoint
+// matched to a map point of `map` at its position.
+Frame ExactFrame(Map& map, const std::vector<Eigen::Vector3d>& positions, bool with_depth) {
+  const geometry::PinholeCamera camera = testing::TestCamera();
+  std::vector<cv::KeyPoint> keypoints;
+  cv::Mat depth(480, 640, CV_32F, cv::Scalar(0.0f));
+  for (const Eigen::Vector3d& p : positions) {
+    const float u = static_cast<float>(500.0 * p.x() / p.z() + 320.0);
+    const float v = static_cast<float>(500.0 * p.y() / p.z() + 240.0);
+    keypoints.emplace_back(u, v, 31.0f);
+    if (with_depth) depth.at<float>(cvRound(v), cvRound(u)) = static_cast<float>(p.z());
+  }
+  const cv::Mat descriptors(static_cast<int>(positions.size()), 32, CV_8U, cv::Scalar(0));
+  auto features =
+      std::make_shared<const FrameFeatures>(keypoints, descriptors, depth, camera, 40.0, 0.1);
+  Frame frame(0, 0.0, features);
+  KeyFrame* keyframe = map.AddKeyFrame(frame);
+  for (std::size_t i = 0; i < positions.size(); ++i) {
+    frame.map_points[i] = map.AddMapPoint(positions[i], keyframe);
+  }
+  return frame;
+}
+
 // A frame at the world origin seeing `positions` (camera = world frame) at their exact
 // projections, each with its depth, every point matched to a map point.
 class UncertaintyTest : public ::testing::Test {
  protected:
   double PositionSigma(const std::vector<Eigen::Vector3d>& positions, bool with_depth = true) {
-    const geometry::PinholeCamera camera = testing::TestCamera();
-    std::vector<cv::KeyPoint> keypoints;
-    cv::Mat depth(480, 640, CV_32F, cv::Scalar(0.0f));
-    for (const Eigen::Vector3d& p : positions) {
-      const float u = static_cast<float>(500.0 * p.x() / p.z() + 320.0);
-      const float v = static_cast<float>(500.0 * p.y() / p.z() + 240.0);
-      keypoints.emplace_back(u, v, 31.0f);
-      if (with_depth) depth.at<float>(cvRound(v), cvRound(u)) = static_cast<float>(p.z());
-    }
-    const cv::Mat descriptors(static_cast<int>(positions.size()), 32, CV_8U, cv::Scalar(0));
-    auto features =
-        std::make_shared<const FrameFeatures>(keypoints, descriptors, depth, camera, 40.0, 0.1);
-    Frame frame(0, 0.0, features);
-    KeyFrame* keyframe = map_.AddKeyFrame(frame);
-    for (std::size_t i = 0; i < positions.size(); ++i) {
-      frame.map_points[i] = map_.AddMapPoint(positions[i], keyframe);
-    }
+    const Frame frame = ExactFrame(map_, positions, with_depth);
     const ScalePyramid pyramid(1.2, 8);
     const PoseUncertainty uncertainty = EstimatePoseUncertainty(frame, pyramid, 40.0);
     rotation_sigma_deg_ = uncertainty.rotation_sigma_deg;
@@ -95,26 +103,13 @@ namespace {
 class CentrePriorTest : public ::testing::Test {
  protected:
   Frame MakeFrame() {
-    const geometry::PinholeCamera camera = testing::TestCamera();
     std::vector<Eigen::Vector3d> positions;
-    std::vector<cv::KeyPoint> keypoints;
     for (int i = -1; i <= 1; ++i) {
       for (int j = -1; j <= 1; ++j) {
         positions.emplace_back(0.5 * i, 0.4 * j, 2.0 + 0.2 * ((i + j + 2) % 3));
-        const Eigen::Vector3d& p = positions.back();
-        keypoints.emplace_back(static_cast<float>(500.0 * p.x() / p.z() + 320.0),
-                               static_cast<float>(500.0 * p.y() / p.z() + 240.0), 31.0f);
       }
     }
-    const cv::Mat descriptors(static_cast<int>(positions.size()), 32, CV_8U, cv::Scalar(0));
-    const cv::Mat depth(480, 640, CV_32F, cv::Scalar(0.0f));
-    auto features =
-        std::make_shared<const FrameFeatures>(keypoints, descriptors, depth, camera, 40.0, 0.1);
-    Frame frame(0, 0.0, features);
-    KeyFrame* keyframe = map_.AddKeyFrame(frame);
-    for (std::size_t i = 0; i < positions.size(); ++i) {
-      frame.map_points[i] = map_.AddMapPoint(positions[i], keyframe);
-    }
+    Frame frame = ExactFrame(map_, positions, false);
     // Start 2 cm off the true pose (the identity).
     frame.pose_cw = geometry::Pose::Identity();
     frame.pose_cw.translation() = Eigen::Vector3d(0.02, -0.01, 0.02);
