@@ -1,6 +1,7 @@
 // noctua.Slam (frame by frame) and noctua.run_slam (a whole sequence) over slam/.
 #include <pybind11/stl.h>
 
+#include <cstdint>
 #include <memory>
 
 #include "bindings.h"
@@ -79,7 +80,9 @@ py::dict RunSlamOnSequence(const py::object& dataset, const py::object& bag,
                            const std::string& method, const py::object& detector, int max_frames,
                            const py::object& out, double brightness, bool sequential, bool force,
                            const py::object& video, const py::object& map_ply,
-                           const py::object& load_map, bool localize, const py::object& save_map) {
+                           const py::object& load_map, bool localize, const py::object& save_map,
+                           bool reject_moving_points, const std::string& vocabulary,
+                           const std::string& sensor, std::uint64_t seed) {
   eval::SlamRunOptions options;
   options.source.dataset = PathArgument(dataset);
   options.source.bag = PathArgument(bag);
@@ -91,6 +94,10 @@ py::dict RunSlamOnSequence(const py::object& dataset, const py::object& bag,
   options.detector_model = PathArgument(detector).string();
   options.max_frames = max_frames;
   options.brightness = brightness;
+  options.sensor = sensor;
+  options.seed = seed;
+  options.reject_moving_points = reject_moving_points;
+  options.vocabulary = vocabulary;
   options.sequential = sequential;
   options.viewer.video = PathArgument(video);
   options.viewer.map_ply = PathArgument(map_ply);
@@ -145,6 +152,7 @@ Slam(config, method="paper", detector=None)
         py::arg("method"), py::arg("detector"), py::arg("max_frames"), py::arg("out"),
         py::arg("brightness"), py::arg("sequential"), py::arg("force"), py::arg("video"),
         py::arg("map_ply"), py::arg("load_map"), py::arg("localize"), py::arg("save_map"),
+        py::arg("reject_moving_points"), py::arg("vocabulary"), py::arg("sensor"), py::arg("seed"),
         "See noctua.run_slam (the Python wrapper documents the arguments).");
 }
 

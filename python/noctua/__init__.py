@@ -81,7 +81,8 @@ def _path(value):
 def run_slam(sequence_dir=None, config=None, method="paper", detector=None, max_frames=0,
              out=None, brightness=1.0, sequential=False, force=False, video=None, map_ply=None,
              load_map=None, localize=False, save_map=None, bag=None, rgb_topic=TUM_RGB_TOPIC,
-             depth_topic=TUM_DEPTH_TOPIC, groundtruth=None):
+             depth_topic=TUM_DEPTH_TOPIC, groundtruth=None, reject_moving_points=False,
+             vocabulary=None, sensor="noiseless", seed=1):
     """Runs the SLAM over a TUM / OpenLORIS sequence folder or a ROS1 bag, as ``noctua slam``
     does (``--dataset`` or ``--bag``).
 
@@ -99,6 +100,13 @@ def run_slam(sequence_dir=None, config=None, method="paper", detector=None, max_
     ``load_map`` starts from a map saved with ``save_map`` (same method and camera) instead of
     a new one; with ``localize`` the run only localises in it and leaves it unchanged.
     ``save_map`` writes the map at the end of the run (``report["map"]`` says what was done).
+
+    ``reject_moving_points`` turns on the model-free rejection of moving points (``slam
+    --reject-moving-points``). ``vocabulary`` is the place-recognition vocabulary (``slam
+    --vocabulary``): ``"default"``, ``"none"`` or a file; None keeps the settings file's
+    (``report["map"]["vocabulary"]`` names the one used). ``brightness``, ``sensor`` and ``seed``
+    darken every frame by a camera model of ``sensor_models()``, as ``slam --brightness --sensor
+    --seed`` do.
     """
     if config is None:
         raise Error("run_slam needs config (a camera preset, e.g. config_path('tum_fr1.yaml'))")
@@ -106,7 +114,8 @@ def run_slam(sequence_dir=None, config=None, method="paper", detector=None, max_
         _path(sequence_dir), _path(bag), rgb_topic, depth_topic, _path(groundtruth),
         _os.fspath(config), method, _path(detector), max_frames, _path(out), brightness,
         sequential, force, _path(video), _path(map_ply), _path(load_map), localize,
-        _path(save_map))
+        _path(save_map), reject_moving_points, "" if vocabulary is None else _os.fspath(vocabulary),
+        sensor, seed)
 
 
 def open_frames(dataset=None, bag=None, rgb_topic=TUM_RGB_TOPIC, depth_topic=TUM_DEPTH_TOPIC,

@@ -67,6 +67,27 @@ def test_run_writes_the_viewer_video_and_the_map(tum_sequence, tum_config, tmp_p
     assert f"element vertex {report['map_points'] + report['keyframes']}" in header
     with pytest.raises(noctua.Error, match="unknown extension"):
         noctua.run_slam(tum_sequence, tum_config, method="orb", video=tmp_path / "run.mkv")
+
+
+def test_run_options_reach_the_slam(tum_sequence, tum_config, tmp_path):
+    default = noctua.run_slam(tum_sequence, tum_config, method="orb", max_frames=8)["report"]
+    assert default["map"]["vocabulary"] != "none"
+    assert not default["reject_moving_points"] and default["sensor"] == "noiseless"
+    dark = noctua.run_slam(tum_sequence, tum_config, method="orb", max_frames=8,
+                           vocabulary="none", reject_moving_points=True, brightness=0.3,
+                           sensor="webcam", seed=2)
+    report = dark["report"]
+    assert report["map"]["vocabulary"] == "none"
+    assert report["reject_moving_points"]
+    assert (report["sensor"], report["seed"], report["brightness"]) == ("webcam", 2, 0.3)
+    with pytest.raises(noctua.Error, match="missing.vocab"):
+        noctua.run_slam(tum_sequence, tum_config, method="orb", max_frames=8,
+                        vocabulary=tmp_path / "missing.vocab")
+    with pytest.raises(noctua.Error, match="no-such-camera"):
+        noctua.run_slam(tum_sequence, tum_config, method="orb", max_frames=8,
+                        sensor="no-such-camera")
+
+
 def test_saved_map_is_reused_for_localisation(tum_sequence, tum_config, tmp_path):
     saved = noctua.run_slam(tum_sequence, tum_config, method="orb", max_frames=20,
                             save_map=tmp_path / "fr1.map")

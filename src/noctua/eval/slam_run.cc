@@ -205,7 +205,10 @@ slam::MapIdentity SlamRunner::RunMapIdentity() const {
 }
 
 nlohmann::json SlamRunner::MapJson(const slam::SequenceRun& run) const {
-  nlohmann::json json = {{"loaded", !options_.load_map.empty()},
+  // The vocabulary is part of a map's identity: a saved map loads only under the same one.
+  const std::string vocabulary = RunMapIdentity().vocabulary;
+  nlohmann::json json = {{"vocabulary", vocabulary.empty() ? "none" : vocabulary},
+                         {"loaded", !options_.load_map.empty()},
                          {"localize", options_.localize},
                          {"saved", !options_.save_map.empty()}};
   if (!options_.load_map.empty()) {
