@@ -149,6 +149,18 @@ void DetectArgs(benchmark::internal::Benchmark* b) {
       ->UseRealTime();
 }
 
+// The other detectors at the default input size on one and two threads, and at full size.
+void OtherModelArgs(benchmark::internal::Benchmark* b) {
+  b->Args({320, 256, 1})
+      ->Args({320, 256, 2})
+      ->Args({640, 480, 2})
+      ->ArgNames({"w", "h", "threads"})
+      ->Unit(benchmark::kMillisecond)
+      ->Repetitions(kRepetitions)
+      ->MinTime(0.2)
+      ->UseRealTime();
+}
+
 BENCHMARK(BM_OrbOpenCv)
     ->Arg(1)
     ->Arg(2)
@@ -158,24 +170,8 @@ BENCHMARK(BM_OrbOpenCv)
     ->MinTime(0.2)
     ->UseRealTime();
 BENCHMARK_CAPTURE(BM_Detect, yolov8n, std::string("yolov8n"))->Apply(DetectArgs);
-BENCHMARK_CAPTURE(BM_Detect, yolov8n_seg, std::string("yolov8n-seg"))
-    ->Args({320, 256, 1})
-    ->Args({320, 256, 2})
-    ->Args({640, 480, 2})
-    ->ArgNames({"w", "h", "threads"})
-    ->Unit(benchmark::kMillisecond)
-    ->Repetitions(kRepetitions)
-    ->MinTime(0.2)
-    ->UseRealTime();
-BENCHMARK_CAPTURE(BM_Detect, yolox_nano, std::string("yolox_nano"))
-    ->Args({320, 256, 1})
-    ->Args({320, 256, 2})
-    ->Args({640, 480, 2})
-    ->ArgNames({"w", "h", "threads"})
-    ->Unit(benchmark::kMillisecond)
-    ->Repetitions(kRepetitions)
-    ->MinTime(0.2)
-    ->UseRealTime();
+BENCHMARK_CAPTURE(BM_Detect, yolov8n_seg, std::string("yolov8n-seg"))->Apply(OtherModelArgs);
+BENCHMARK_CAPTURE(BM_Detect, yolox_nano, std::string("yolox_nano"))->Apply(OtherModelArgs);
 BENCHMARK_CAPTURE(BM_Sequence, extract_only, Mode::kExtractOnly)
     ->Unit(benchmark::kMillisecond)
     ->Repetitions(3)

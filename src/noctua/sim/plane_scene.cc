@@ -2,13 +2,13 @@
 
 #include <Eigen/Geometry>
 #include <cmath>
-#include <fstream>
 #include <iomanip>
 #include <numbers>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 
 #include "noctua/io/image_file.h"
+#include "noctua/io/output_dir.h"
 #include "noctua/util/error.h"
 
 namespace noctua::sim {
@@ -21,17 +21,6 @@ void PlaneSceneOptions::Check() const {
   CheckOption(wall_width_m > 0.0, "plane scene wall_width_m must be positive");
   CheckOption(fps > 0.0, "plane scene fps must be positive");
 }
-
-namespace {
-
-void WriteText(const fs::path& path, const std::string& text) {
-  std::ofstream out(path);
-  out << text;
-  out.close();
-  if (!out) ThrowFileError(path, "cannot write");
-}
-
-}  // namespace
 
 void WritePlaneScene(const cv::Mat& texture, const PlaneSceneOptions& options,
                      const fs::path& dir) {
@@ -88,14 +77,15 @@ void WritePlaneScene(const cv::Mat& texture, const PlaneSceneOptions& options,
     ground_truth << t << ' ' << position.x() << ' ' << position.y() << ' ' << position.z() << ' '
                  << q.x() << ' ' << q.y() << ' ' << q.z() << ' ' << q.w() << "\n";
   }
-  WriteText(dir / "rgb.txt", rgb.str());
-  WriteText(dir / "depth.txt", depth.str());
-  WriteText(dir / "associations.txt", associations.str());
-  WriteText(dir / "groundtruth.txt", ground_truth.str());
-  WriteText(dir / "camera.yaml",
-            "%YAML:1.0\n# The generated plane scene's ideal pinhole camera.\n"
-            "Camera.fx: 525.0\nCamera.fy: 525.0\nCamera.cx: 319.5\nCamera.cy: 239.5\n"
-            "Camera.width: 640\nCamera.height: 480\nDepthMapFactor: 5000.0\n");
+  io::WriteTextFileAtomically(dir / "rgb.txt", rgb.str());
+  io::WriteTextFileAtomically(dir / "depth.txt", depth.str());
+  io::WriteTextFileAtomically(dir / "associations.txt", associations.str());
+  io::WriteTextFileAtomically(dir / "groundtruth.txt", ground_truth.str());
+  io::WriteTextFileAtomically(
+      dir / "camera.yaml",
+      "%YAML:1.0\n# The generated plane scene's ideal pinhole camera.\n"
+      "Camera.fx: 525.0\nCamera.fy: 525.0\nCamera.cx: 319.5\nCamera.cy: 239.5\n"
+      "Camera.width: 640\nCamera.height: 480\nDepthMapFactor: 5000.0\n");
 }
 
 }  // namespace noctua::sim

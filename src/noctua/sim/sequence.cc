@@ -1,12 +1,12 @@
 #include "noctua/sim/sequence.h"
 
-#include <fstream>
 #include <iomanip>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "noctua/io/dataset.h"
 #include "noctua/io/image_file.h"
+#include "noctua/io/output_dir.h"
 #include "noctua/sim/motion_blur.h"
 #include "noctua/util/error.h"
 
@@ -26,13 +26,6 @@ void SimulationOptions::Check() const {
 }
 
 namespace {
-
-void WriteText(const fs::path& path, const std::string& text) {
-  std::ofstream out(path);
-  out << text;
-  out.close();
-  if (!out) ThrowFileError(path, "cannot write");
-}
 
 std::string Stamp(double t) {
   std::ostringstream out;
@@ -125,9 +118,9 @@ SimulationReport SimulateSequence(const fs::path& input, const io::CameraConfig&
                  << Stamp(frame.depth_timestamp) << " depth/" << depth_name << "\n";
     if (progress) progress(k + 1, total);
   }
-  WriteText(output / "rgb.txt", rgb_list.str());
-  WriteText(output / "depth.txt", depth_list.str());
-  WriteText(output / "associations.txt", associations.str());
+  io::WriteTextFileAtomically(output / "rgb.txt", rgb_list.str());
+  io::WriteTextFileAtomically(output / "depth.txt", depth_list.str());
+  io::WriteTextFileAtomically(output / "associations.txt", associations.str());
   fs::copy_file(ground_truth, output / "groundtruth.txt", fs::copy_options::overwrite_existing);
   report.measured_mean_ratio = input_sum > 0.0 ? output_sum / input_sum : 0.0;
   report.person_pixels = total > 0 ? person_sum / total : 0.0;
