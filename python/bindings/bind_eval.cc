@@ -5,6 +5,7 @@
 #include "convert.h"
 #include "noctua/eval/feature_eval.h"
 #include "noctua/eval/trajectory_error.h"
+#include "noctua/eval/warped_pair.h"
 #include "noctua/io/output_dir.h"
 #include "noctua/pipeline/method_config.h"
 
@@ -99,9 +100,41 @@ py::dict EvaluateFeatures(const py::object& dataset, const py::object& bag,
   return dict;
 }
 
+// eval::MatchWarpedPair for one photo (a path or an array) and one method.
+py::dict MatchWarpedPairPy(const py::object& photo, const std::string& method_name,
+                           const py::object& config, double rotation_deg, double scale,
+                           double ratio, double correct_px, double fresh_noise_multiple,
+                           unsigned seed) {
+  eval::WarpedPairOptions options;
+  options.rotation_deg = rotation_deg;
+  options.scale = scale;
+  options.ratio = ratio;
+  options.correct_px = correct_px;
+  options.fresh_noise_multiple = fresh_noise_multiple;
+  options.Check();
+  const cv::Mat image = ImageArgument(photo, "photo");
+  const auto method =
+      pipeline::CreateMethod(method_name, pipeline::LoadMethodConfig(PathArgument(config), ""));
+  eval::WarpedPairResult result;
+  {
+    py::gil_scoped_release release;
+    result = eval::MatchWarpedPair(*method, image, options, seed);
+  }
+  py::dict dict;
+  dict["keypoints"] = result.keypoints;
+  dict["matches"] = result.matches;
+  dict["correct"] = result.correct;
+  dict["noise_sigma"] = result.noise_sigma;
+  return dict;
+}
+
 }  // namespace
 
 void BindEval(py::module_& m) {
+  m.def("match_warped_pair", &MatchWarpedPairPy, py::arg("photo"), py::arg("method"),
+        py::arg("config"), py::arg("rotation_deg"), py::arg("scale"), py::arg("ratio"),
+        py::arg("correct_px"), py::arg("fresh_noise_multiple"), py::arg("seed"),
+        "See noctua.match_warped_pair (the Python wrapper documents it).");
   m.def("evaluate_features", &EvaluateFeatures, py::arg("dataset"), py::arg("bag"),
         py::arg("rgb_topic"), py::arg("depth_topic"), py::arg("groundtruth"), py::arg("camera"),
         py::arg("methods"), py::arg("gap"), py::arg("pair_step"), py::arg("max_frames"),

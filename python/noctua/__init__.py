@@ -148,6 +148,20 @@ def write_bag(sequence_dir, path, max_frames=0, depth_factor=5000.0, rgb_topic=T
                       rgb_topic, depth_topic, rgb_encoding, depth_encoding)
 
 
+def match_warped_pair(photo, method="noctua", config=None, rotation_deg=8.0, scale=0.9, ratio=0.8,
+                      correct_px=3.0, fresh_noise_multiple=1.0, seed=1):
+    """Matching on a single photo, where there is no second view (``bench/dark_photos``): the
+    photo (uint8 BGR / grey array or a path) against a copy warped by a known similarity
+    (``rotation_deg``, ``scale``), each copy with fresh Gaussian noise of
+    ``fresh_noise_multiple`` times the photo's own estimated noise (its real noise would otherwise
+    repeat like texture). Ratio-test matches (``ratio``) are correct when the warp maps their
+    point within ``correct_px`` of the partner. ``config``: a settings file for the extractor
+    (None: defaults). Returns a dict: ``keypoints``, ``matches``, ``correct``, ``noise_sigma``.
+    """
+    return _noctua.match_warped_pair(photo, method, _path(config), rotation_deg, scale, ratio,
+                                     correct_px, fresh_noise_multiple, seed)
+
+
 def evaluate_features(dataset=None, bag=None, camera=None, groundtruth=None,
                       methods=("orb", "paper"), gap=20, pair_step=1, max_frames=0, ratio=0.8,
                       config=None, out=None, force=False, rgb_topic=TUM_RGB_TOPIC,

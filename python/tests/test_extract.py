@@ -63,3 +63,14 @@ def test_mask_removes_points_and_extractor_is_reusable(first_frame):
 def test_settings_file_is_read(first_frame, tum_config):
     keypoints, _ = noctua.extract(cv2.imread(str(first_frame)), method="orb", config=tum_config)
     assert len(keypoints) > 500
+
+
+def test_warped_pair_on_a_real_dark_photo(shared_dir):
+    photo = shared_dir / "data" / "lowlight" / "lol_low20" / "low" / "2.png"
+    noctua_pair = noctua.match_warped_pair(photo, method="noctua")
+    orb_pair = noctua.match_warped_pair(cv2.imread(str(photo)), method="orb")
+    assert noctua_pair["noise_sigma"] == orb_pair["noise_sigma"] > 0
+    assert 0 < noctua_pair["correct"] <= noctua_pair["matches"] <= noctua_pair["keypoints"]
+    assert noctua_pair["correct"] > orb_pair["correct"]
+    with pytest.raises(noctua.Error, match="scale"):
+        noctua.match_warped_pair(photo, scale=0)
