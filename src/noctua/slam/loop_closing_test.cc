@@ -345,6 +345,17 @@ TEST(LoopClosing, ClosesADriftedLoopOnRealFramesOfFr1Rpy) {
   EXPECT_LT(mean_error(), error_before);
 }
 
+// The essential graph's spanning tree: each keyframe hangs from its most covisible earlier one,
+// here the one just before it (it shares the most of the view); the first has no parent.
+TEST_F(GeneratedLoop, SpanningTreeJoinsEachKeyFrameToItsMostCovisibleEarlierOne) {
+  for (int k = 0; k < 8; ++k) AddKeyFrame(k);
+  const std::vector<KeyFrame*> keyframes = map_.KeyFrames();
+  const std::vector<KeyFrame*> parents = LoopCloser::SpanningTree(keyframes);
+  ASSERT_EQ(parents.size(), keyframes.size());
+  EXPECT_EQ(parents[0], nullptr);
+  for (std::size_t k = 1; k < keyframes.size(); ++k) EXPECT_EQ(parents[k], keyframes[k - 1]) << k;
+}
+
 TEST(LoopClosing, SettingsAreReadFromTheSlamSection) {
   const std::filesystem::path dir =
       std::filesystem::temp_directory_path() / "noctua_loop_closing_settings";
