@@ -107,7 +107,10 @@ std::vector<KeyFrame*> LoopCloser::DetectCandidates(KeyFrame* keyframe,
     KeyFrame* other = keyframes.at(candidate.id);
     if (!other->bad()) candidates.push_back(other);
   }
-  fprintf(stderr, "\n");
+  return KeepConsistent(candidates);
+}
+
+std::vector<KeyFrame*> LoopCloser::KeepConsistent(const std::vector<KeyFrame*>& candidates) {
   // Consistency: each candidate's group (it and its covisibles) continues the previous
   // keyframe's groups it shares a keyframe with.
   std::vector<std::pair<std::set<long>, int>> groups;
@@ -129,7 +132,7 @@ std::vector<KeyFrame*> LoopCloser::DetectCandidates(KeyFrame* keyframe,
         groups.emplace_back(group, consistency);
         continued[g] = true;
       }
-      if (consistency >= settings.consistency && !enough) {
+      if (consistency >= options_.loop_closing.consistency && !enough) {
         consistent.push_back(candidate);
         enough = true;
       }
@@ -311,6 +314,36 @@ void LoopCloser::Correct(KeyFrame* keyframe, const LoopMatch& match, Map& map,
       point->UpdateNormalAndDepth(pyramid_);
     }
   }
+  FuseLoop(keyframe, group, match, mapper);
+  // The links the fusion made, beyond the group's own: the loop's edges in the essential graph.
+  std::map<KeyFrame*, std::set<KeyFrame*, KeyFrameIdLess>, KeyFrameIdLess> new_links;
+  for (KeyFrame* k : group) {
+    k->UpdateConnections();
+    for (const auto& [other, weight] : k->connections()) {
+      if (previous_links[k].count(other) > 0 || original.count(other) > 0) continue;
+      new_links[k].insert(other);
+    }
+  }
+  OptimizeEssentialGraph(map, match.loop, original, new_links);
+  for (const auto& [k, relative] : culled)
+    k->set_pose_cw(relative.second * relative.first->pose_cw());
+  loop_edges_.emplace_back(keyframe, match.loop);
+  last_loop_keyframe_id_ = keyframe->id();
+  consistent_groups_.clear();
+
+  LoopClosure loop;
+  loop.keyframe_id = keyframe->id();
+  loop.loop_keyframe_id = match.loop->id();
+  loop.frame_id = keyframe->frame_id();
+  loop.inliers = match.inliers;
+  const geometry::Pose moved_by = keyframe->pose_cw().inverse() * before_cw;
+  loop.correction_m = (keyframe->CameraCentre() - before_cw.inverse().translation()).norm();
+  loop.correction_deg = geometry::RotationAngle(moved_by) * 180.0 / M_PI;
+  loops_.push_back(loop);
+}
+
+void LoopCloser::FuseLoop(KeyFrame* keyframe, const std::vector<KeyFrame*>& group,
+                          const LoopMatch& match, LocalMapper& mapper) {
   // Fusion: the loop's points take the place of the keyframe's, then of the whole group's.
   for (int i = 0; i < static_cast<int>(match.matches.size()); ++i) {
     MapPoint* loop_point = match.matches[static_cast<std::size_t>(i)];
@@ -338,31 +371,6 @@ void LoopCloser::Correct(KeyFrame* keyframe, const LoopMatch& match, Map& map,
     }
   }
   for (KeyFrame* k : group) mapper.Fuse(k, loop_points, kLoopFuseRadius, true);
-  // The links the fusion made, beyond the group's own: the loop's edges in the essential graph.
-  std::map<KeyFrame*, std::set<KeyFrame*, KeyFrameIdLess>, KeyFrameIdLess> new_links;
-  for (KeyFrame* k : group) {
-    k->UpdateConnections();
-    for (const auto& [other, weight] : k->connections()) {
-      if (previous_links[k].count(other) > 0 || original.count(other) > 0) continue;
-      new_links[k].insert(other);
-    }
-  }
-  OptimizeEssentialGraph(map, match.loop, original, new_links);
-  for (const auto& [k, relative] : culled)
-    k->set_pose_cw(relative.second * relative.first->pose_cw());
-  loop_edges_.emplace_back(keyframe, match.loop);
-  last_loop_keyframe_id_ = keyframe->id();
-  consistent_groups_.clear();
-
-  LoopClosure loop;
-  loop.keyframe_id = keyframe->id();
-  loop.loop_keyframe_id = match.loop->id();
-  loop.frame_id = keyframe->frame_id();
-  loop.inliers = match.inliers;
-  const geometry::Pose moved_by = keyframe->pose_cw().inverse() * before_cw;
-  loop.correction_m = (keyframe->CameraCentre() - before_cw.inverse().translation()).norm();
-  loop.correction_deg = geometry::RotationAngle(moved_by) * 180.0 / M_PI;
-  loops_.push_back(loop);
 }
 
 void LoopCloser::OptimizeEssentialGraph(

@@ -70,6 +70,9 @@ class LoopCloser {
   std::vector<KeyFrame*> DetectCandidates(KeyFrame* keyframe,
                                           const place::KeyFrameDatabase& database,
                                           const std::map<long, KeyFrame*>& keyframes);
+  // Candidates whose group (it and its covisibles) continues a group of the previous keyframe's
+  // consistency times in a row; remembers this keyframe's groups for the next.
+  std::vector<KeyFrame*> KeepConsistent(const std::vector<KeyFrame*>& candidates);
   std::optional<LoopMatch> CheckGeometry(KeyFrame* keyframe, KeyFrame* candidate,
                                          const place::KeyFrameDatabase& database) const;
   // RANSAC over 3D-3D pairs (Eigen::umeyama); returns the pose of the best hypothesis refitted
@@ -80,6 +83,10 @@ class LoopCloser {
                                        const FrameFeatures& features, long seed,
                                        std::vector<bool>& inliers) const;
   void Correct(KeyFrame* keyframe, const LoopMatch& match, Map& map, LocalMapper& mapper);
+  // The loop's matched points replace the keyframe's, then the loop group's points are fused
+  // into every keyframe of the corrected `group`, the loop's points winning.
+  void FuseLoop(KeyFrame* keyframe, const std::vector<KeyFrame*>& group, const LoopMatch& match,
+                LocalMapper& mapper);
   void OptimizeEssentialGraph(
       Map& map, KeyFrame* loop, const std::map<KeyFrame*, geometry::Pose, KeyFrameIdLess>& original,
       const std::map<KeyFrame*, std::set<KeyFrame*, KeyFrameIdLess>, KeyFrameIdLess>& new_links);
