@@ -325,6 +325,10 @@ void LoopCloser::Correct(KeyFrame* keyframe, const LoopMatch& match, Map& map,
     }
   }
   OptimizeEssentialGraph(map, match.loop, original, new_links);
+  if (options_.loop_closing.global_ba_iterations > 0) {
+    GlobalBundleAdjustment(map.KeyFrames(), pyramid_, options_.bf,
+                           options_.loop_closing.global_ba_iterations);
+  }
   for (const auto& [k, relative] : culled)
     k->set_pose_cw(relative.second * relative.first->pose_cw());
   loop_edges_.emplace_back(keyframe, match.loop);

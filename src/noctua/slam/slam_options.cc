@@ -31,6 +31,7 @@ void LoopClosingOptions::Check() const {
               "slam: loop min_loop_inliers must be at least min_ransac_inliers");
   CheckOption(essential_min_weight >= 1, "slam: loop essential_min_weight must be at least 1");
   CheckOption(pose_graph_iterations >= 1, "slam: loop pose_graph_iterations must be at least 1");
+  CheckOption(global_ba_iterations >= 0, "slam: loop global_ba_iterations must not be negative");
 }
 
 void SlamOptions::Check() const {
