@@ -153,6 +153,8 @@ void AddSlamCommand(CLI::App& app) {
   command->add_flag("--reject-moving-points", args->run.reject_moving_points,
                     "Keep points that move against the static world out of tracking and mapping, "
                     "found from geometry alone (no detector needed; docs/slam.md, Moving points)");
+  command->add_flag("--no-loop-closing", args->run.no_loop_closing,
+                    "Do not look for loops (docs/slam.md, Loop closing)");
   viz::ViewerOptions& viewer = args->run.viewer;
   command->add_flag("--view", viewer.window,
                     "Show the frame, its keypoints, dynamic regions, trajectory and map in a "

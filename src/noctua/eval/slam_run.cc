@@ -35,12 +35,23 @@ nlohmann::json RunJson(const SlamRunOptions& options, const SlamRunReport& repor
   json["sensor"] = options.sensor;
   json["seed"] = options.seed;
   json["reject_moving_points"] = options.reject_moving_points;
+  json["no_loop_closing"] = options.no_loop_closing;
   json["frames"] = run.frames.size();
   json["tracked_frames"] = run.trajectory.size();
   json["lost_frames"] = run.lost_frames.size();
   json["lost_frame_indices"] = run.lost_frames;
   json["coasted_frames"] = run.coasted_frames.size();
   json["coasted_frame_indices"] = run.coasted_frames;
+  json["loops_closed"] = run.loops.size();
+  json["loops"] = nlohmann::json::array();
+  for (const slam::LoopClosure& loop : run.loops) {
+    json["loops"].push_back({{"keyframe", loop.keyframe_id},
+                             {"loop_keyframe", loop.loop_keyframe_id},
+                             {"frame", loop.frame_id},
+                             {"inliers", loop.inliers},
+                             {"correction_m", loop.correction_m},
+                             {"correction_deg", loop.correction_deg}});
+  }
   json["keyframes"] = run.keyframes;
   json["map_points"] = run.map_points;
   json["interrupted"] = run.interrupted;
@@ -90,11 +101,11 @@ std::string CountsMarkdown(const SlamRunReport& report, bool sequential) {
   std::snprintf(
       counts, sizeof(counts),
       "\nframes %zu, with a pose %zu (coasting %zu), lost %zu, dropped %zu, keyframes %d, "
-      "map points %d, peak RSS %.1f MB\n"
+      "map points %d, loops closed %zu, peak RSS %.1f MB\n"
       "%.1f frames/s (%.2f s for the run, loading included, %s)\n",
       run.frames.size(), run.trajectory.size(), run.coasted_frames.size(), run.lost_frames.size(),
-      run.dropped_frames.size(), run.keyframes, run.map_points, PeakResidentMemoryMb(),
-      run.FramesPerSecond(), run.wall_s,
+      run.dropped_frames.size(), run.keyframes, run.map_points, run.loops.size(),
+      PeakResidentMemoryMb(), run.FramesPerSecond(), run.wall_s,
       sequential ? "sequential" : "extraction overlapped with tracking");
   return counts;
 }
@@ -157,6 +168,7 @@ slam::SlamSetup CheckedSetup(const SlamRunOptions& options) {
   options.Check();
   slam::SlamSetup setup = slam::LoadSlamSetup(options.config);
   setup.options.reject_moving_points = options.reject_moving_points;
+  if (options.no_loop_closing) setup.options.loop_closing.enabled = false;
   if (!options.vocabulary.empty()) setup.options.vocabulary = options.vocabulary;
   return setup;
 }

@@ -41,6 +41,9 @@ struct SlamRunOptions {
   bool detect_inline = false;
   // Model-free rejection of moving points (slam::SlamOptions::reject_moving_points).
   bool reject_moving_points = false;
+  // Turns loop closing off (slam::LoopClosingOptions::enabled; on unless the settings file's
+  // `slam: loop_closing: false`).
+  bool no_loop_closing = false;
   // Place-recognition vocabulary for relocalisation (slam::SlamOptions::vocabulary): "" keeps the
   // settings file's Vocabulary.file (by default the shipped vocabulary); "none", "default" or a
   // vocabulary file.

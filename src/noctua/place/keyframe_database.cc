@@ -13,6 +13,7 @@ void DatabaseQueryOptions::Check() const {
               "place: min_score_ratio must be in [0, 1]");
   CheckOption(covisibles >= 0, "place: covisibles must not be negative");
   CheckOption(max_candidates >= 0, "place: max_candidates must not be negative");
+  CheckOption(min_score >= 0.0 && min_score <= 1.0, "place: min_score must be in [0, 1]");
 }
 
 void KeyFrameDatabase::Add(long id, BowVector bow, FeatureVector features) {
@@ -63,14 +64,17 @@ const FeatureVector& KeyFrameDatabase::features(long id) const {
 
 std::vector<PlaceCandidate> KeyFrameDatabase::Query(const BowVector& query,
                                                     const DatabaseQueryOptions& options,
-                                                    const CovisiblesOf& covisibles) const {
+                                                    const CovisiblesOf& covisibles,
+                                                    const std::set<long>& excluded) const {
   options.Check();
   // Words shared with the query, per keyframe, from the inverted index.
   std::map<long, int> shared;
   for (const auto& [word, weight] : query) {
     const auto it = inverted_.find(word);
     if (it == inverted_.end()) continue;
-    for (long id : it->second) ++shared[id];
+    for (long id : it->second) {
+      if (excluded.count(id) == 0) ++shared[id];
+    }
   }
   int most_shared = 0;
   for (const auto& [id, count] : shared) most_shared = std::max(most_shared, count);
@@ -83,7 +87,7 @@ std::vector<PlaceCandidate> KeyFrameDatabase::Query(const BowVector& query,
     candidate.id = id;
     candidate.shared_words = count;
     candidate.score = candidate.accumulated_score = Score(query, entries_.at(id).bow);
-    scored[id] = candidate;
+    if (candidate.score >= options.min_score) scored[id] = candidate;
   }
   // Each scored keyframe's group (itself and its scored covisibles) is represented by the
   // group's best keyframe (ties: the later one), with the group's total score.

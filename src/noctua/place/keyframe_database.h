@@ -2,6 +2,7 @@
 
 #include <functional>
 #include <map>
+#include <set>
 #include <vector>
 
 #include "noctua/place/vocabulary.h"
@@ -19,6 +20,9 @@ struct DatabaseQueryOptions {
   // own, so that a place seen by several keyframes outranks a lone lookalike (ORB-SLAM: 10).
   int covisibles = 10;
   int max_candidates = 0;  // 0: all that pass
+  // Keyframes scoring below this are no candidates and add nothing to a group's score (ORB-SLAM's
+  // loop detection: the lowest score of the query keyframe's covisibles; relocalisation: 0).
+  double min_score = 0.0;
 
   // Throws noctua::Error naming the first invalid field.
   void Check() const;
@@ -50,10 +54,13 @@ class KeyFrameDatabase {
   // relocalisation does: only keyframes sharing enough words are scored; with `covisibles`
   // (id -> its covisible keyframes, best first) each candidate's score accumulates over those of
   // its best covisibles that were scored too, and the group is represented by its best-scoring
-  // keyframe. Deterministic: the same database and query give the same list.
+  // keyframe. Keyframes in `excluded` are left out before anything is counted (loop detection:
+  // the query keyframe and those covisible with it). Deterministic: the same database and query
+  // give the same list.
   using CovisiblesOf = std::function<std::vector<long>(long id, int count)>;
   std::vector<PlaceCandidate> Query(const BowVector& query, const DatabaseQueryOptions& options,
-                                    const CovisiblesOf& covisibles = {}) const;
+                                    const CovisiblesOf& covisibles = {},
+                                    const std::set<long>& excluded = {}) const;
 
  private:
   struct Entry {

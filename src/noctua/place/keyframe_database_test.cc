@@ -53,6 +53,32 @@ TEST(KeyFrameDatabase, RanksKeyFramesSharingWordsAndForgetsErasedOnes) {
   EXPECT_EQ(replaced[0].id, 4);
 }
 
+// Loop detection: the query keyframe's own neighbourhood is excluded before the word and score
+// ratios are taken, so an older place that shares fewer words is still found; keyframes scoring
+// below min_score are no candidates.
+TEST(KeyFrameDatabase, ExcludedKeyFramesAndMinScoreLeaveOlderPlaces) {
+  KeyFrameDatabase database;
+  database.Add(1, Uniform({1, 2, 3, 4}), {});     // the query's neighbour: shares all 4 words
+  database.Add(2, Uniform({1, 2, 3, 9}), {});     // the older place: 3 words, 0.75
+  database.Add(3, Uniform({1, 20, 21, 22}), {});  // 1 word, 0.25
+  DatabaseQueryOptions options;
+  options.min_shared_words_ratio = 0.0;
+  options.min_score_ratio = 0.0;
+  ASSERT_EQ(database.Query(Uniform({1, 2, 3, 4}), options).size(), 3u);
+  options.min_shared_words_ratio = 0.8;
+  EXPECT_EQ(database.Query(Uniform({1, 2, 3, 4}), options).size(), 1u);  // only 1 (4 of 4)
+  const auto without_neighbour = database.Query(Uniform({1, 2, 3, 4}), options, {}, {1});
+  ASSERT_EQ(without_neighbour.size(), 1u);
+  EXPECT_EQ(without_neighbour[0].id, 2);
+  options.min_shared_words_ratio = 0.0;
+  options.min_score = 0.5;
+  const auto scored = database.Query(Uniform({1, 2, 3, 4}), options, {}, {1});
+  ASSERT_EQ(scored.size(), 1u);
+  EXPECT_EQ(scored[0].id, 2);
+  options.min_score = 0.8;
+  EXPECT_TRUE(database.Query(Uniform({1, 2, 3, 4}), options, {}, {1}).empty());
+}
+
 // Covisibility: two keyframes that see the same place add up and outrank a lone keyframe that
 // scores a little better by itself; the group is represented by its best keyframe.
 TEST(KeyFrameDatabase, CovisibleKeyFramesAccumulateTheirScores) {

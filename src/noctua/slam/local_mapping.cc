@@ -227,7 +227,8 @@ bool LocalMapper::ReprojectsWell(const KeyFrame& keyframe, int index,
   return error2 * pyramid_.inverse_sigma2[static_cast<std::size_t>(level)] <= threshold;
 }
 
-void LocalMapper::Fuse(KeyFrame* keyframe, const std::vector<MapPoint*>& points, double radius) {
+void LocalMapper::Fuse(KeyFrame* keyframe, const std::vector<MapPoint*>& points, double radius,
+                       bool points_win) {
   const FrameFeatures& features = keyframe->features();
   const auto& camera = features.camera();
   const Eigen::Vector3d centre = keyframe->CameraCentre();
@@ -273,7 +274,7 @@ void LocalMapper::Fuse(KeyFrame* keyframe, const std::vector<MapPoint*>& points,
     if (best_index < 0 || best_distance > Matcher::kThresholdLow) continue;
     MapPoint* existing = keyframe->map_point(best_index);
     if (existing != nullptr && !existing->bad()) {
-      if (existing->weighted_observations() > point->weighted_observations()) {
+      if (!points_win && existing->weighted_observations() > point->weighted_observations()) {
         point->Replace(existing);
       } else {
         existing->Replace(point);

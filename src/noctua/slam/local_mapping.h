@@ -35,6 +35,12 @@ class LocalMapper {
   // (SlamOptions::triangulation). The new points join the recent points on probation. Returns
   // how many were made.
   int CreateTriangulatedPoints(KeyFrame* keyframe, Map& map);
+  // Projects `points` into `keyframe` and fuses each with the best matching keypoint: where that
+  // keypoint already has a point, the one with more observations survives, or, with
+  // `points_win` (loop fusion: the loop's points are the older, undrifted ones), always the
+  // projected point.
+  void Fuse(KeyFrame* keyframe, const std::vector<MapPoint*>& points, double radius,
+            bool points_win = false);
 
  private:
   void CullRecentPoints(const KeyFrame* keyframe);
@@ -51,8 +57,6 @@ class LocalMapper {
   // ORB-SLAM's SearchInNeighbors: fuses the keyframe's points with those of its neighbours
   // (duplicates merged, missing observations added), so points gather all their observations.
   void FuseWithNeighbours(KeyFrame* keyframe);
-  // Projects `points` into `keyframe` and fuses each with the best matching keypoint.
-  void Fuse(KeyFrame* keyframe, const std::vector<MapPoint*>& points, double radius);
 
   const SlamOptions& options_;
   const ScalePyramid& pyramid_;

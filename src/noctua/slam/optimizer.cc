@@ -195,6 +195,16 @@ int OptimizePose(Frame& frame, const ScalePyramid& pyramid, double bf, const Cen
   return inliers;
 }
 
+namespace {
+
+// Refines the poses of `local_set` (but keyframe 0) and `points`; other keyframes that see the
+// points hold still. Observations that stay outliers are removed from the map.
+void AdjustKeyFramesAndPoints(const std::set<KeyFrame*, KeyFrameIdLess>& local_set,
+                              const std::vector<MapPoint*>& points, const ScalePyramid& pyramid,
+                              double bf, int iterations);
+
+}  // namespace
+
 void LocalBundleAdjustment(KeyFrame* keyframe, const ScalePyramid& pyramid, double bf,
                            int iterations, int max_covisibles) {
   // Local keyframes: this one and its covisible ones (the most covisible, when bounded); local
@@ -211,6 +221,32 @@ void LocalBundleAdjustment(KeyFrame* keyframe, const ScalePyramid& pyramid, doub
       points.push_back(point);
     }
   }
+  AdjustKeyFramesAndPoints(local_set, points, pyramid, bf, iterations);
+}
+
+void GlobalBundleAdjustment(const std::vector<KeyFrame*>& keyframes, const ScalePyramid& pyramid,
+                            double bf, int iterations) {
+  std::set<KeyFrame*, KeyFrameIdLess> all;
+  for (KeyFrame* k : keyframes) {
+    if (!k->bad()) all.insert(k);
+  }
+  std::set<const MapPoint*> listed;
+  std::vector<MapPoint*> points;
+  for (KeyFrame* k : all) {
+    for (MapPoint* point : k->map_points()) {
+      if (point != nullptr && !point->bad() && listed.insert(point).second) {
+        points.push_back(point);
+      }
+    }
+  }
+  AdjustKeyFramesAndPoints(all, points, pyramid, bf, iterations);
+}
+
+namespace {
+
+void AdjustKeyFramesAndPoints(const std::set<KeyFrame*, KeyFrameIdLess>& local_set,
+                              const std::vector<MapPoint*>& points, const ScalePyramid& pyramid,
+                              double bf, int iterations) {
   // Fixed keyframes: they see local points but are not local.
   std::set<KeyFrame*, KeyFrameIdLess> fixed_set;
   for (MapPoint* point : points) {
@@ -290,4 +326,5 @@ void LocalBundleAdjustment(KeyFrame* keyframe, const ScalePyramid& pyramid, doub
   }
 }
 
+}  // namespace
 }  // namespace noctua::slam

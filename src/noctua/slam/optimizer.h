@@ -46,4 +46,10 @@ PoseUncertainty EstimatePoseUncertainty(const Frame& frame, const ScalePyramid& 
 void LocalBundleAdjustment(KeyFrame* keyframe, const ScalePyramid& pyramid, double bf,
                            int iterations, int max_covisibles);
 
+// Bundle adjustment of every good keyframe of `keyframes` (the first keyframe of the map held
+// fixed) and all the points they see, as the local one (after a loop is closed: ORB-SLAM's
+// global bundle adjustment, here in line and bounded to `iterations`).
+void GlobalBundleAdjustment(const std::vector<KeyFrame*>& keyframes, const ScalePyramid& pyramid,
+                            double bf, int iterations);
+
 }  // namespace noctua::slam

@@ -319,6 +319,7 @@ SequenceRun RunFrames(RgbdSlam& slam, io::FrameSource& source, const RunOptions&
   run.keyframes_created = static_cast<int>(slam.tracker().map().all_keyframes().size());
   run.map_points_created = slam.tracker().map().NumMapPointsCreated();
   run.map_points_allocated = slam.tracker().map().NumMapPointsAllocated();
+  run.loops = slam.tracker().loop_closer().loops();
   return run;
 }
 

@@ -97,6 +97,7 @@ struct SequenceRun {
   int keyframes_created = 0;
   long map_points_created = 0;
   int map_points_allocated = 0;
+  std::vector<LoopClosure> loops;  // closed, in order (SlamOptions::loop_closing)
   // Frames a real-time source skipped while the SLAM was busy (none from a recording read as
   // fast as the SLAM goes): frames + dropped_frames are all the source delivered.
   std::vector<io::DroppedFrame> dropped_frames;

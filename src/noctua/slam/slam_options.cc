@@ -21,6 +21,19 @@ void TriangulationOptions::Check() const {
   CheckOption(scale_consistency >= 1.0, "slam: triangulation scale_consistency must be >= 1");
 }
 
+void LoopClosingOptions::Check() const {
+  CheckOption(consistency >= 1, "slam: loop consistency must be at least 1");
+  CheckOption(min_keyframes >= 1, "slam: loop min_keyframes must be at least 1");
+  CheckOption(min_feature_matches >= 3, "slam: loop min_feature_matches must be at least 3");
+  CheckOption(ransac_iterations >= 1, "slam: loop ransac_iterations must be at least 1");
+  CheckOption(min_ransac_inliers >= 3, "slam: loop min_ransac_inliers must be at least 3");
+  CheckOption(min_loop_inliers >= min_ransac_inliers,
+              "slam: loop min_loop_inliers must be at least min_ransac_inliers");
+  CheckOption(essential_min_weight >= 1, "slam: loop essential_min_weight must be at least 1");
+  CheckOption(pose_graph_iterations >= 1, "slam: loop pose_graph_iterations must be at least 1");
+  CheckOption(global_ba_iterations >= 0, "slam: loop global_ba_iterations must not be negative");
+}
+
 void SlamOptions::Check() const {
   CheckOption(scale_factor > 1.0, "slam: scale_factor must be greater than 1");
   CheckOption(num_levels >= 1 && num_levels <= 32, "slam: num_levels must be in [1, 32]");
@@ -48,6 +61,7 @@ void SlamOptions::Check() const {
   CheckOption(keyframe_redundancy > 0.0 && keyframe_redundancy <= 1.0,
               "slam: keyframe_redundancy must be in (0, 1]");
   triangulation.Check();
+  loop_closing.Check();
   moving.Check();
   CheckOption(moving_frames_to_cull >= 1, "slam: moving_frames_to_cull must be at least 1");
 }
@@ -77,8 +91,9 @@ void ReadSlamSection(const YAML::Node& root, const std::string& source, SlamOpti
   if (!section.IsMap()) {
     ThrowLineError(source, section.Mark().line + 1, "'slam' must be a map of settings");
   }
-  static const std::set<std::string> kKnown = {"triangulate", "triangulation_covisibles",
-                                               "max_depth_m", "motion_prior_acceleration_mps2"};
+  static const std::set<std::string> kKnown = {"triangulate",  "triangulation_covisibles",
+                                               "max_depth_m",  "motion_prior_acceleration_mps2",
+                                               "loop_closing", "loop_min_inliers"};
   for (const auto& entry : section) {
     const auto key = entry.first.as<std::string>();
     if (!kKnown.contains(key)) {
@@ -90,6 +105,8 @@ void ReadSlamSection(const YAML::Node& root, const std::string& source, SlamOpti
   io::ReadSetting(section, "max_depth_m", source, options.max_depth_m);
   io::ReadSetting(section, "motion_prior_acceleration_mps2", source,
                   options.motion_prior_acceleration_mps2);
+  io::ReadSetting(section, "loop_closing", source, options.loop_closing.enabled);
+  io::ReadSetting(section, "loop_min_inliers", source, options.loop_closing.min_loop_inliers);
 }
 
 }  // namespace

@@ -30,6 +30,7 @@ Tracker::Tracker(const SlamOptions& options)
       vocabulary_(LoadSlamVocabulary(options)),
       pyramid_(options.scale_factor, options.num_levels),
       mapper_(options_, pyramid_),
+      loop_closer_(options_, pyramid_),
       matcher_(0.9, true, pyramid_, options.bf),
       strict_matcher_(0.7, true, pyramid_, options.bf) {
   options_.Check();
@@ -704,9 +705,11 @@ void Tracker::CreateNewKeyFrame() {
   mapper_.ProcessKeyFrame(keyframe, map_);
   EraseCulledFromDatabase();
   AddToDatabase(keyframe);
+  loop_closer_.ProcessKeyFrame(keyframe, map_, mapper_, database_, database_keyframes_);
   reference_ = last_keyframe_ = keyframe;
   last_keyframe_frame_id_ = frame.id;
-  // Local bundle adjustment moved the keyframe: the frame keeps its pose relative to it.
+  // Local bundle adjustment (or a loop closed) moved the keyframe: the frame keeps its pose
+  // relative to it.
   frame.pose_cw = keyframe->pose_cw();
 }
 

@@ -12,6 +12,7 @@
 #include "noctua/place/keyframe_database.h"
 #include "noctua/slam/frame.h"
 #include "noctua/slam/local_mapping.h"
+#include "noctua/slam/loop_closing.h"
 #include "noctua/slam/map.h"
 #include "noctua/slam/matcher.h"
 #include "noctua/slam/optimizer.h"
@@ -81,6 +82,7 @@ class Tracker {
   const place::Vocabulary* vocabulary() const { return vocabulary_.get(); }
   const place::KeyFrameDatabase& keyframe_database() const { return database_; }
   const LocalMapper& mapper() const { return mapper_; }
+  const LoopCloser& loop_closer() const { return loop_closer_; }
   const std::vector<FrameRecord>& records() const { return records_; }
   TrackingState state() const { return state_; }
 
@@ -126,6 +128,7 @@ class Tracker {
   ScalePyramid pyramid_;
   Map map_;
   LocalMapper mapper_;
+  LoopCloser loop_closer_;  // after mapping of each keyframe (SlamOptions::loop_closing)
   Matcher matcher_;         // ratio 0.9 (ORB-SLAM's tracking)
   Matcher strict_matcher_;  // ratio 0.7 (reference keyframe, relocalisation)
 
