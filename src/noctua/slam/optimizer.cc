@@ -144,6 +144,9 @@ int OptimizePose(Frame& frame, const ScalePyramid& pyramid, double bf, const Cen
   geometry::Pose estimate = initial;
   ceres::HuberLoss huber_mono(std::sqrt(kChi2Mono));
   ceres::HuberLoss huber_stereo(std::sqrt(kChi2Stereo));
+  // Residuals are in σ, so Cauchy's scale is the prior's outlier_sigmas.
+  ceres::CauchyLoss prior_loss(
+      prior != nullptr && prior->outlier_sigmas > 0.0 ? prior->outlier_sigmas : 1.0);
   int inliers = 0;
   constexpr int kRounds = 4;
   for (int round = 0; round < kRounds; ++round) {
@@ -173,7 +176,8 @@ int OptimizePose(Frame& frame, const ScalePyramid& pyramid, double bf, const Cen
     if (prior != nullptr && prior->sigma_m > 0.0) {
       problem.AddResidualBlock(new ceres::AutoDiffCostFunction<CentrePriorCost, 3, 4, 3>(
                                    new CentrePriorCost{prior->centre, 1.0 / prior->sigma_m}),
-                               nullptr, block.rotation.data(), block.translation.data());
+                               prior->outlier_sigmas > 0.0 ? &prior_loss : nullptr,
+                               block.rotation.data(), block.translation.data());
     }
     ceres::Solver::Summary summary;
     ceres::Solve(SolverOptions(10, ceres::DENSE_QR), &problem, &summary);

@@ -19,10 +19,14 @@ inline constexpr double kChi2Stereo = 7.815;
 // last round is without the robust loss). Returns the number of inliers.
 // A prediction of where the camera centre is, with its standard deviation: with one,
 // OptimizePose also weighs the residual (centre - predicted) / sigma_m, so a frame whose matches
-// fix its pose weakly stays near where the camera can physically be.
+// fix its pose weakly stays near where the camera can physically be. With outlier_sigmas > 0
+// the residual's cost is Cauchy's of that scale instead of the square: within it the prior is
+// Gaussian, beyond it its pull is bounded (at most outlier_sigmas / 2 σ's worth) and falls
+// off, so that matches which agree on another pose outweigh a prediction that is wrong.
 struct CentrePrior {
   Eigen::Vector3d centre;  // in the world
   double sigma_m = 0.0;
+  double outlier_sigmas = 0.0;  // 0: Gaussian everywhere
 };
 int OptimizePose(Frame& frame, const ScalePyramid& pyramid, double bf,
                  const CentrePrior* prior = nullptr);

@@ -102,6 +102,21 @@ namespace {
 // front of the world origin, every one matched to its map point.
 class CentrePriorTest : public ::testing::Test {
  protected:
+  // 5 x 5 points with depth, 1 to 3 m away: they fix the centre to a fraction of a millimetre.
+  Frame MakeDeepFrame() {
+    std::vector<Eigen::Vector3d> positions;
+    for (int i = -2; i <= 2; ++i) {
+      for (int j = -2; j <= 2; ++j) {
+        const double z = 1.0 + 0.5 * ((i + 2 * j + 6) % 5);
+        positions.emplace_back(0.25 * i * z, 0.2 * j * z, z);
+      }
+    }
+    Frame frame = ExactFrame(map_, positions, true);
+    frame.pose_cw = geometry::Pose::Identity();
+    frame.pose_cw.translation() = Eigen::Vector3d(0.02, -0.01, 0.02);
+    return frame;
+  }
+
   Frame MakeFrame() {
     std::vector<Eigen::Vector3d> positions;
     for (int i = -1; i <= 1; ++i) {
@@ -137,6 +152,33 @@ TEST_F(CentrePriorTest, AWideOneChangesNothingAndANarrowOneHoldsTheCentre) {
   OptimizePose(narrow, pyramid_, 40.0, &beside);
   const Eigen::Vector3d centre = narrow.pose_cw.inverse().translation();
   EXPECT_LT((centre - beside.centre).norm(), 2e-3);
+}
+
+TEST_F(CentrePriorTest, ARobustOneYieldsToMatchesThatAgreeFarFromIt) {
+  // A prior 0.1 mm wide, 3 cm (300 σ) beside the pose the 25 points agree on.
+  CentrePrior gaussian{Eigen::Vector3d(0.03, 0.0, 0.0), 1e-4};
+  Frame held = MakeDeepFrame();
+  OptimizePose(held, pyramid_, 40.0, &gaussian);
+  const double held_off = held.pose_cw.inverse().translation().norm();
+  EXPECT_GT(held_off, 0.01);  // the square's pull grows with the distance: it wins
+
+  CentrePrior robust = gaussian;
+  robust.outlier_sigmas = 3.0;
+  Frame yielded = MakeDeepFrame();
+  ASSERT_EQ(OptimizePose(yielded, pyramid_, 40.0, &robust), 25);
+  // Cauchy's pull is bounded: the matches keep the centre within a millimetre of the truth.
+  EXPECT_LT(yielded.pose_cw.inverse().translation().norm(), 1e-3);
+
+  // Within its scale the robust prior still holds the centre like the Gaussian one.
+  const CentrePrior near_gaussian{Eigen::Vector3d(0.001, 0.0, 0.0), 1e-4};
+  CentrePrior near_robust = near_gaussian;
+  near_robust.outlier_sigmas = 30.0;
+  Frame a = MakeFrame();
+  Frame b = MakeFrame();
+  OptimizePose(a, pyramid_, 40.0, &near_gaussian);
+  OptimizePose(b, pyramid_, 40.0, &near_robust);
+  EXPECT_LT((b.pose_cw.inverse().translation() - near_gaussian.centre).norm(), 2e-4);
+  EXPECT_LT((a.pose_cw.inverse().translation() - b.pose_cw.inverse().translation()).norm(), 2e-4);
 }
 
 }  // namespace

@@ -141,13 +141,15 @@ TEST_F(RgbdSlamTest, WithoutTriangulationPointsComeFromDepthOnly) {
 
 // Depth blanked over the left half of every frame (as a hole of the sensor would): with
 // triangulation the map gets points there, from keypoints that have no depth, and every frame
-// is still tracked; without it, half the frames are not.
+// is still tracked; without it, half the frames are not. The motion prior is off: it alone
+// carries this sequence through (measured: every frame tracked without triangulation).
 TEST_F(RgbdSlamTest, TriangulatesWhereDepthIsMissingAndTracksEveryFrame) {
   constexpr int kFrames = 100;
   constexpr double kBlankLeftOfPx = 320.0;
   for (const bool triangulate : {true, false}) {
     SlamOptions options = setup_->options;
     options.triangulation.enabled = triangulate;
+    options.motion_prior_acceleration_mps2 = 0.0;
     RgbdSlam slam(setup_->camera.Camera(), Orb(*setup_), options);
     std::vector<int> not_tracked;
     for (int i = 0; i < kFrames; ++i) {
@@ -502,6 +504,19 @@ TEST_F(RgbdSlamTest, BadConfigAndBadDataFailClearly) {
   EXPECT_EQ(read.options.triangulation.covisibles, 4);
   EXPECT_EQ(read.options.max_depth_m, 2.0);
   EXPECT_TRUE(LoadSlamSetup(write(camera)).options.triangulation.enabled);
+  // The motion prior: on by default, robust beyond 3 σ; both keys read.
+  const SlamOptions defaults = LoadSlamSetup(write(camera)).options;
+  EXPECT_EQ(defaults.motion_prior_acceleration_mps2, 1.0);
+  EXPECT_EQ(defaults.motion_prior_outlier_sigmas, 3.0);
+  const SlamOptions prior = LoadSlamSetup(write(camera + "slam:\n  motion_prior_acceleration_mps2: "
+                                                         "0\n  motion_prior_outlier_sigmas: 5\n"))
+                                .options;
+  EXPECT_EQ(prior.motion_prior_acceleration_mps2, 0.0);
+  EXPECT_EQ(prior.motion_prior_outlier_sigmas, 5.0);
+  EXPECT_THAT(error_of([&] {
+                LoadSlamSetup(write(camera + "slam:\n  motion_prior_outlier_sigmas: -1\n"));
+              }),
+              HasSubstr("motion_prior_outlier_sigmas must not be negative"));
   EXPECT_THAT(error_of([&] { LoadSlamSetup(write(camera + "slam:\n  triangulat: false\n")); }),
               HasSubstr("bad.yaml:9: unknown setting 'slam.triangulat'"));
   EXPECT_THAT(

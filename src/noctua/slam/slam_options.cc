@@ -49,6 +49,8 @@ void SlamOptions::Check() const {
   CheckOption(certain_sigma_ratio >= 0.0, "slam: certain_sigma_ratio must not be negative");
   CheckOption(motion_prior_acceleration_mps2 >= 0.0,
               "slam: motion_prior_acceleration_mps2 must not be negative");
+  CheckOption(motion_prior_outlier_sigmas >= 0.0,
+              "slam: motion_prior_outlier_sigmas must not be negative");
   CheckOption(max_coasting_frames >= 0, "slam: max_coasting_frames must not be negative");
   CheckOption(min_inliers_after_relocalisation >= min_tracked_inliers,
               "slam: min_inliers_after_relocalisation must be at least min_tracked_inliers");
@@ -91,9 +93,13 @@ void ReadSlamSection(const YAML::Node& root, const std::string& source, SlamOpti
   if (!section.IsMap()) {
     ThrowLineError(source, section.Mark().line + 1, "'slam' must be a map of settings");
   }
-  static const std::set<std::string> kKnown = {"triangulate",  "triangulation_covisibles",
-                                               "max_depth_m",  "motion_prior_acceleration_mps2",
-                                               "loop_closing", "loop_min_inliers"};
+  static const std::set<std::string> kKnown = {"triangulate",
+                                               "triangulation_covisibles",
+                                               "max_depth_m",
+                                               "motion_prior_acceleration_mps2",
+                                               "motion_prior_outlier_sigmas",
+                                               "loop_closing",
+                                               "loop_min_inliers"};
   for (const auto& entry : section) {
     const auto key = entry.first.as<std::string>();
     if (!kKnown.contains(key)) {
@@ -105,6 +111,8 @@ void ReadSlamSection(const YAML::Node& root, const std::string& source, SlamOpti
   io::ReadSetting(section, "max_depth_m", source, options.max_depth_m);
   io::ReadSetting(section, "motion_prior_acceleration_mps2", source,
                   options.motion_prior_acceleration_mps2);
+  io::ReadSetting(section, "motion_prior_outlier_sigmas", source,
+                  options.motion_prior_outlier_sigmas);
   io::ReadSetting(section, "loop_closing", source, options.loop_closing.enabled);
   io::ReadSetting(section, "loop_min_inliers", source, options.loop_closing.min_loop_inliers);
 }

@@ -107,14 +107,19 @@ struct SlamOptions {
   // hand-held motion (10 frames at 30 Hz) stays within centimetres; 0 turns coasting off.
   int max_coasting_frames = 10;
   double certain_sigma_ratio = 2.0;
-  // Root-mean-square acceleration of the camera, m/s²; 0 (default) turns the motion prior off.
+  // Root-mean-square acceleration of the camera, m/s²; 0 turns the motion prior off.
   // With it, each frame's final pose optimisation also weighs how far the camera centre is from
   // where the last velocity puts it (σ = ½·a·dt² combined with the recent poses' median σ), as a
   // Kalman filter's prediction would: a hand-held camera cannot jump centimetres between frames.
-  // Off by default: on tum_fr1_rpy_200 a = 1 lowered every method's mean ATE and the spread of
-  // orb and clahe-orb, but on bonn_crowd_120 with model-free rejection two runs in seven followed
-  // the people (docs/slam.md, "Motion prior").
-  double motion_prior_acceleration_mps2 = 0.0;
+  // On tum_fr1_rpy_200 (5 brightness scales) a = 1 with the Cauchy loss below lowered the mean
+  // ATE of orb, clahe-orb and paper and brought each one's worst/best ratio from 1.4-1.6 to
+  // 1.2-1.3 (docs/slam.md, "Motion prior").
+  double motion_prior_acceleration_mps2 = 1.0;
+  // Beyond this many σ the motion prior's pull is bounded and falls off (Cauchy loss of this
+  // scale; CentrePrior::outlier_sigmas); 0 keeps it Gaussian everywhere. A Gaussian prior holds
+  // the camera to a velocity that can itself be wrong: on bonn_crowd_120 with model-free
+  // rejection one run in five followed the people (0.19 m); with 3, none (docs/slam.md).
+  double motion_prior_outlier_sigmas = 3.0;
   int min_inliers_after_relocalisation = 50;
   int max_frames_between_keyframes = 30;  // ORB-SLAM: the frame rate
   // Frames after a relocalisation in which no keyframe is made (once the map has more than
@@ -177,9 +182,10 @@ std::shared_ptr<const place::Vocabulary> LoadSlamVocabulary(const SlamOptions& o
 // ThDepth (default 40; close depth = ThDepth * bf / fx), noctua's optional Vocabulary.file
 // (SlamOptions::vocabulary; a relative path is relative to the settings file) and noctua's
 // optional `slam:` section: `triangulate` (TriangulationOptions::enabled),
-// `triangulation_covisibles`, `max_depth_m`, `motion_prior_acceleration_mps2`, `loop_closing`
-// (LoopClosingOptions::enabled) and `loop_min_inliers` (LoopClosingOptions::min_loop_inliers).
-// Throws noctua::Error naming the file and key for anything missing or invalid.
+// `triangulation_covisibles`, `max_depth_m`, `motion_prior_acceleration_mps2`,
+// `motion_prior_outlier_sigmas`, `loop_closing` (LoopClosingOptions::enabled) and
+// `loop_min_inliers` (LoopClosingOptions::min_loop_inliers). Throws noctua::Error naming the file
+// and key for anything missing or invalid.
 struct SlamSetup {
   io::CameraConfig camera;
   SlamOptions options;

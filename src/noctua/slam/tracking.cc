@@ -262,7 +262,8 @@ std::optional<CentrePrior> Tracker::MotionPrior() const {
   if (!std::isfinite(*middle)) return {};
   const geometry::Pose predicted = *velocity_ * last_->pose_cw;
   return CentrePrior{predicted.inverse().translation(),
-                     std::hypot(0.5 * acceleration * dt * dt, *middle)};
+                     std::hypot(0.5 * acceleration * dt * dt, *middle),
+                     options_.motion_prior_outlier_sigmas};
 }
 
 bool Tracker::TrackWithMotionModel() {
