@@ -153,6 +153,9 @@ void AddSlamCommand(CLI::App& app) {
   command->add_flag("--reject-moving-points", args->run.reject_moving_points,
                     "Keep points that move against the static world out of tracking and mapping, "
                     "found from geometry alone (no detector needed; docs/slam.md, Moving points)");
+  command->add_flag("--deterministic", args->run.deterministic,
+                    "Run the local bundle adjustment in line instead of on its own thread: the "
+                    "same result every run, at the cost of slower keyframes (docs/slam.md)");
   command->add_flag("--no-loop-closing", args->run.no_loop_closing,
                     "Do not look for loops (docs/slam.md, Loop closing)");
   viz::ViewerOptions& viewer = args->run.viewer;

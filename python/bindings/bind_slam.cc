@@ -82,7 +82,7 @@ py::dict RunSlamOnSequence(const py::object& dataset, const py::object& bag,
                            const py::object& video, const py::object& map_ply,
                            const py::object& load_map, bool localize, const py::object& save_map,
                            bool reject_moving_points, const std::string& vocabulary,
-                           const std::string& sensor, std::uint64_t seed) {
+                           const std::string& sensor, std::uint64_t seed, bool deterministic) {
   eval::SlamRunOptions options;
   options.source.dataset = PathArgument(dataset);
   options.source.bag = PathArgument(bag);
@@ -99,6 +99,7 @@ py::dict RunSlamOnSequence(const py::object& dataset, const py::object& bag,
   options.reject_moving_points = reject_moving_points;
   options.vocabulary = vocabulary;
   options.sequential = sequential;
+  options.deterministic = deterministic;
   options.viewer.video = PathArgument(video);
   options.viewer.map_ply = PathArgument(map_ply);
   options.load_map = PathArgument(load_map);
@@ -153,6 +154,7 @@ Slam(config, method="paper", detector=None)
         py::arg("brightness"), py::arg("sequential"), py::arg("force"), py::arg("video"),
         py::arg("map_ply"), py::arg("load_map"), py::arg("localize"), py::arg("save_map"),
         py::arg("reject_moving_points"), py::arg("vocabulary"), py::arg("sensor"), py::arg("seed"),
+        py::arg("deterministic"),
         "See noctua.run_slam (the Python wrapper documents the arguments).");
 }
 

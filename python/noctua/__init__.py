@@ -82,7 +82,7 @@ def run_slam(sequence_dir=None, config=None, method="paper", detector=None, max_
              out=None, brightness=1.0, sequential=False, force=False, video=None, map_ply=None,
              load_map=None, localize=False, save_map=None, bag=None, rgb_topic=TUM_RGB_TOPIC,
              depth_topic=TUM_DEPTH_TOPIC, groundtruth=None, reject_moving_points=False,
-             vocabulary=None, sensor="noiseless", seed=1):
+             vocabulary=None, sensor="noiseless", seed=1, deterministic=False):
     """Runs the SLAM over a TUM / OpenLORIS sequence folder or a ROS1 bag, as ``noctua slam``
     does (``--dataset`` or ``--bag``).
 
@@ -106,7 +106,8 @@ def run_slam(sequence_dir=None, config=None, method="paper", detector=None, max_
     --vocabulary``): ``"default"``, ``"none"`` or a file; None keeps the settings file's
     (``report["map"]["vocabulary"]`` names the one used). ``brightness``, ``sensor`` and ``seed``
     darken every frame by a camera model of ``sensor_models()``, as ``slam --brightness --sensor
-    --seed`` do.
+    --seed`` do. ``deterministic`` runs the local bundle adjustment in line (``slam
+    --deterministic``): the same result every run, slower keyframes.
     """
     if config is None:
         raise Error("run_slam needs config (a camera preset, e.g. config_path('tum_fr1.yaml'))")
@@ -115,7 +116,7 @@ def run_slam(sequence_dir=None, config=None, method="paper", detector=None, max_
         _os.fspath(config), method, _path(detector), max_frames, _path(out), brightness,
         sequential, force, _path(video), _path(map_ply), _path(load_map), localize,
         _path(save_map), reject_moving_points, "" if vocabulary is None else _os.fspath(vocabulary),
-        sensor, seed)
+        sensor, seed, deterministic)
 
 
 def open_frames(dataset=None, bag=None, rgb_topic=TUM_RGB_TOPIC, depth_topic=TUM_DEPTH_TOPIC,

@@ -73,6 +73,7 @@ def test_run_options_reach_the_slam(tum_sequence, tum_config, tmp_path):
     default = noctua.run_slam(tum_sequence, tum_config, method="orb", max_frames=8)["report"]
     assert default["map"]["vocabulary"] != "none"
     assert not default["reject_moving_points"] and default["sensor"] == "noiseless"
+    assert not default["deterministic"]  # the bundle adjustment on its own thread
     dark = noctua.run_slam(tum_sequence, tum_config, method="orb", max_frames=8,
                            vocabulary="none", reject_moving_points=True, brightness=0.3,
                            sensor="webcam", seed=2)
@@ -80,6 +81,12 @@ def test_run_options_reach_the_slam(tum_sequence, tum_config, tmp_path):
     assert report["map"]["vocabulary"] == "none"
     assert report["reject_moving_points"]
     assert (report["sensor"], report["seed"], report["brightness"]) == ("webcam", 2, 0.3)
+    # Deterministic: the bundle adjustment in line, the same trajectory run after run.
+    runs = [noctua.run_slam(tum_sequence, tum_config, method="orb", max_frames=40,
+                            deterministic=True) for _ in range(2)]
+    assert runs[0]["report"]["deterministic"]
+    assert runs[0]["trajectory"].shape[0] == 40
+    assert (runs[0]["trajectory"] == runs[1]["trajectory"]).all()
     with pytest.raises(noctua.Error, match="missing.vocab"):
         noctua.run_slam(tum_sequence, tum_config, method="orb", max_frames=8,
                         vocabulary=tmp_path / "missing.vocab")

@@ -35,6 +35,9 @@ struct SlamRunOptions {
   std::string sensor = "noiseless";
   std::uint64_t seed = 1;
   bool sequential = false;  // extract a frame only after the previous one is tracked
+  // Local bundle adjustment in line instead of on its own thread, so that a run gives the same
+  // result every time (slam::SlamOptions::background_bundle_adjustment, on unless this is set).
+  bool deterministic = false;
   // The detector: on a thread of its own on every detect_every-th frame, unless detect_inline
   // (in the extraction, every frame).
   int detect_every = dynamic::AsyncMaskOptions().every_n;
@@ -128,6 +131,7 @@ struct StageTiming {
   std::string stage;
   double median_ms = 0.0;
   double mean_ms = 0.0;
+  double p95_ms = 0.0;  // 95th percentile (nearest rank)
   double max_ms = 0.0;
 };
 std::vector<StageTiming> SummarizeStages(const std::vector<slam::FrameOutcome>& frames,

@@ -1,7 +1,8 @@
 // Determinism: the same sequence and settings give the same trajectory and the same ATE, run
 // after run, with 1 or 2 OpenCV threads (the extractor's pyramid, FAST and phase-congruency
 // edges use cv::parallel_for_; Ceres runs single-threaded), and whether the next frame is
-// extracted while this one is tracked or after it.
+// extracted while this one is tracked or after it, with the local bundle adjustment in line
+// (SlamOptions::background_bundle_adjustment off: the deterministic mode).
 #include <gtest/gtest.h>
 
 #include <opencv2/core.hpp>
@@ -28,8 +29,10 @@ Outcome RunWithThreads(const io::Sequence& sequence, const SlamSetup& setup,
   RunOptions options;
   options.max_frames = 20;
   options.overlap_extraction = overlap;
+  SlamOptions slam_options = setup.options;
+  slam_options.background_bundle_adjustment = false;  // the deterministic mode (the default)
   const SequenceRun run = RunSequence(sequence, setup.camera.depth_factor, setup.camera.Camera(),
-                                      method->feature2d(), setup.options, options);
+                                      method->feature2d(), slam_options, options);
   cv::setNumThreads(previous);
   return {run.trajectory,
           eval::ComputeAte(sequence.ground_truth(), run.trajectory).translation_m.rmse};

@@ -3,12 +3,15 @@
 #include <Eigen/Geometry>
 #include <Eigen/SVD>
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <optional>
 #include <set>
+#include <utility>
 
 #include "noctua/slam/matcher.h"
 #include "noctua/slam/optimizer.h"
+#include "noctua/util/timer.h"
 
 namespace noctua::slam {
 namespace {
@@ -78,6 +81,42 @@ double StereoParallaxCos(double depth, double baseline) {
 
 }  // namespace
 
+LocalMapper::~LocalMapper() {
+  if (solving_.valid()) solving_.wait();
+}
+
+bool LocalMapper::CollectBundleAdjustment(bool wait) {
+  for (;;) {
+    if (pending_adjustment_ != nullptr) {
+      if (!wait && solving_.wait_for(std::chrono::seconds(0)) != std::future_status::ready) {
+        return false;
+      }
+      const Stopwatch watch;
+      solving_.get();  // rethrows what the solve threw
+      bundle_adjustment_wait_ms_ += watch.ElapsedMs();
+      pending_adjustment_->Apply(pyramid_);
+      pending_adjustment_.reset();
+    }
+    KeyFrame* due = std::exchange(adjustment_due_, nullptr);
+    if (due == nullptr || due->bad()) return true;
+    StartBundleAdjustment(due);
+    if (!wait) return false;
+  }
+}
+
+void LocalMapper::StartBundleAdjustment(KeyFrame* keyframe) {
+  pending_adjustment_ =
+      BundleAdjustment::Local(keyframe, pyramid_, options_.bf, options_.local_ba_iterations,
+                              options_.local_ba_max_covisibles);
+  solving_ = std::async(std::launch::async,
+                        [adjustment = pending_adjustment_.get()] { adjustment->Solve(); });
+}
+
+const std::vector<MapPoint*>& LocalMapper::pending_points() const {
+  static const std::vector<MapPoint*> kNone;
+  return pending_adjustment_ != nullptr ? pending_adjustment_->points() : kNone;
+}
+
 void LocalMapper::ProcessKeyFrame(KeyFrame* keyframe, Map& map) {
   for (int i = 0; i < keyframe->features().size(); ++i) {
     MapPoint* point = keyframe->map_point(i);
@@ -98,7 +137,16 @@ void LocalMapper::ProcessKeyFrame(KeyFrame* keyframe, Map& map) {
   CullRecentPoints(keyframe);
   if (options_.triangulation.enabled) CreateTriangulatedPoints(keyframe, map);
   if (options_.fuse_neighbours) FuseWithNeighbours(keyframe);
-  if (options_.local_ba) {
+  if (options_.local_ba && options_.background_bundle_adjustment) {
+    // One solve at a time, each from the map as the last one left it: while one is running,
+    // the latest keyframe waits its turn (its window covers those before it, which are then
+    // not adjusted on their own, as when ORB-SLAM's mapping falls behind).
+    if (pending_adjustment_ == nullptr) {
+      StartBundleAdjustment(keyframe);
+    } else {
+      adjustment_due_ = keyframe;
+    }
+  } else if (options_.local_ba) {
     LocalBundleAdjustment(keyframe, pyramid_, options_.bf, options_.local_ba_iterations,
                           options_.local_ba_max_covisibles);
   }

@@ -1,26 +1,42 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <future>
 #include <list>
+#include <memory>
 #include <optional>
 #include <vector>
 
 #include "noctua/slam/map.h"
+#include "noctua/slam/optimizer.h"
 #include "noctua/slam/slam_options.h"
 
 namespace noctua::slam {
 
-// Integrates each new keyframe into the map, in the tracking thread so that a run is
-// deterministic: observations and covisibility, culling of new points that are rarely matched,
-// triangulation of new points between keyframes for keypoints without usable depth, local bundle
-// adjustment, culling of redundant keyframes (ORB-SLAM's LocalMapping).
+// Integrates each new keyframe into the map (ORB-SLAM's LocalMapping): observations and
+// covisibility, culling of new points that are rarely matched, triangulation of new points
+// between keyframes for keypoints without usable depth, local bundle adjustment, culling of
+// redundant keyframes. Everything but the bundle adjustment's solve runs on the tracking thread;
+// the solve runs in line (deterministic) or, with SlamOptions::background_bundle_adjustment, on a
+// thread of its own, so that tracking does not wait for it.
 class LocalMapper {
  public:
   LocalMapper(const SlamOptions& options, const ScalePyramid& pyramid)
       : options_(options), pyramid_(pyramid) {}
+  ~LocalMapper();
+  LocalMapper(const LocalMapper&) = delete;
+  LocalMapper& operator=(const LocalMapper&) = delete;
 
   // `map` receives the points triangulated with the keyframe.
   void ProcessKeyFrame(KeyFrame* keyframe, Map& map);
+  // Applies the background bundle adjustment's result if it is ready and starts the one of the
+  // keyframe waiting for its turn, if any; with `wait`, until none is left. Returns whether none
+  // is left. Call on the tracking thread (at the start of each frame).
+  bool CollectBundleAdjustment(bool wait);
+  // The points of the pending bundle adjustment (empty without one): they must not be freed.
+  const std::vector<MapPoint*>& pending_points() const;
+  // Milliseconds the tracking thread waited for background bundle adjustments, in all.
+  double bundle_adjustment_wait_ms() const { return bundle_adjustment_wait_ms_; }
   // New points still on probation (culled if rarely matched): the mapper holds them.
   const std::list<MapPoint*>& recent_points() const { return recent_points_; }
   // Points made by triangulation so far, whether culled since or not.
@@ -43,6 +59,7 @@ class LocalMapper {
             bool points_win = false);
 
  private:
+  void StartBundleAdjustment(KeyFrame* keyframe);
   void CullRecentPoints(const KeyFrame* keyframe);
   // The world position of keypoint i of `first` and j of `second` when it passes the parallax,
   // positive depth, reprojection and scale checks; `k` the intrinsics, `baseline` the virtual
@@ -62,6 +79,12 @@ class LocalMapper {
   const ScalePyramid& pyramid_;
   std::list<MapPoint*> recent_points_;
   std::vector<long> triangulated_point_ids_;  // increasing, as the map gives them
+  // The bundle adjustment being solved in the background, and its solve (declared after it, so
+  // that the solve is waited for before it is destroyed).
+  std::unique_ptr<BundleAdjustment> pending_adjustment_;
+  std::future<void> solving_;
+  KeyFrame* adjustment_due_ = nullptr;  // mapped while another was solving: adjusted next
+  double bundle_adjustment_wait_ms_ = 0.0;
 };
 
 }  // namespace noctua::slam

@@ -186,5 +186,87 @@ TEST(TriangulationTest, OptionsCheckRejectsBadThresholds) {
   EXPECT_THROW(options.Check(), Error);
 }
 
+// The mapped points of the generated scene (seen by both keyframes, with depth), each moved by
+// 2 cm, and the second keyframe moved by 3 cm: the bundle adjustment has something to undo.
+std::vector<MapPoint*> PerturbMappedPoints(TriangulationScene& scene) {
+  std::vector<MapPoint*> points;
+  std::mt19937 random(11);
+  std::uniform_real_distribution<double> offset(-0.02, 0.02);
+  for (int k = 0; k < static_cast<int>(scene.scene().size()); ++k) {
+    MapPoint* point = scene.second()->map_point(k);
+    if (point == nullptr) continue;
+    point->set_position(point->position() +
+                        Eigen::Vector3d(offset(random), offset(random), offset(random)));
+    points.push_back(point);
+  }
+  geometry::Pose moved = scene.second()->pose_cw();
+  moved.translation() += Eigen::Vector3d(0.03, -0.01, 0.02);
+  scene.second()->set_pose_cw(moved);
+  return points;
+}
+
+TEST(BackgroundBundleAdjustmentTest, ChangesTheMapOnlyWhenAppliedAfterItsSolve) {
+  const ScalePyramid pyramid(1.2, 8);
+  TriangulationScene scene(GeneratedScene(), SecondPose(0.4));
+  const std::vector<MapPoint*> points = PerturbMappedPoints(scene);
+  ASSERT_EQ(points.size(), 40u);
+  const geometry::Pose truth = SecondPose(0.4);
+  const geometry::Pose moved = scene.second()->pose_cw();
+  const Eigen::Vector3d moved_point = points[1]->position();
+  const std::unique_ptr<BundleAdjustment> adjustment =
+      BundleAdjustment::Local(scene.second(), pyramid, kBf, 20, 20);
+  EXPECT_EQ(adjustment->points().size(), 40u);
+  adjustment->Apply(pyramid);  // before Solve: nothing happens
+  EXPECT_EQ(scene.second()->pose_cw().matrix(), moved.matrix());
+  adjustment->Solve();  // on its copies only
+  EXPECT_EQ(scene.second()->pose_cw().matrix(), moved.matrix());
+  EXPECT_EQ(points[1]->position(), moved_point);
+  adjustment->Apply(pyramid);
+  const double before = (moved.translation() - truth.translation()).norm();
+  const double after = (scene.second()->pose_cw().translation() - truth.translation()).norm();
+  EXPECT_LT(after, 0.2 * before);
+  EXPECT_NE(points[1]->position(), moved_point);
+}
+
+TEST(BackgroundBundleAdjustmentTest, LeavesAPointCulledWhileItSolved) {
+  const ScalePyramid pyramid(1.2, 8);
+  TriangulationScene scene(GeneratedScene(), SecondPose(0.4));
+  const std::vector<MapPoint*> points = PerturbMappedPoints(scene);
+  const std::unique_ptr<BundleAdjustment> adjustment =
+      BundleAdjustment::Local(scene.second(), pyramid, kBf, 20, 20);
+  adjustment->Solve();
+  // The map goes on while the solve runs: a point is culled.
+  const Eigen::Vector3d culled_position = points[0]->position();
+  points[0]->SetBad();
+  adjustment->Apply(pyramid);
+  EXPECT_EQ(points[0]->position(), culled_position);
+  EXPECT_TRUE(points[0]->bad());
+  for (int k = 0; k < scene.second()->features().size(); ++k) {
+    EXPECT_NE(scene.second()->map_point(k), points[0]);
+  }
+  EXPECT_FALSE(points[1]->bad());
+}
+
+TEST(BackgroundBundleAdjustmentTest, TheMapperHoldsItsPointsUntilItLandsIt) {
+  const ScalePyramid pyramid(1.2, 8);
+  TriangulationScene scene(GeneratedScene(), SecondPose(0.4));
+  PerturbMappedPoints(scene);
+  const geometry::Pose moved = scene.second()->pose_cw();
+  SlamOptions options;
+  options.background_bundle_adjustment = true;
+  options.triangulation.enabled = false;
+  options.bf = kBf;
+  LocalMapper mapper(options, pyramid);
+  Map unused;
+  mapper.ProcessKeyFrame(scene.second(), unused);
+  EXPECT_EQ(mapper.pending_points().size(), 40u);                 // held until it lands
+  EXPECT_EQ(scene.second()->pose_cw().matrix(), moved.matrix());  // not applied yet
+  EXPECT_TRUE(mapper.CollectBundleAdjustment(/*wait=*/true));
+  EXPECT_TRUE(mapper.pending_points().empty());
+  const geometry::Pose truth = SecondPose(0.4);
+  EXPECT_LT((scene.second()->pose_cw().translation() - truth.translation()).norm(), 0.006);
+  EXPECT_TRUE(mapper.CollectBundleAdjustment(/*wait=*/false));  // nothing left
+}
+
 }  // namespace
 }  // namespace noctua::slam

@@ -70,6 +70,9 @@ bool LoopCloser::ProcessKeyFrame(KeyFrame* keyframe, Map& map, LocalMapper& mapp
   for (KeyFrame* candidate : DetectCandidates(keyframe, database, keyframes)) {
     const std::optional<LoopMatch> match = CheckGeometry(keyframe, candidate, database);
     if (!match) continue;
+    // The correction moves the map: the local bundle adjustment still solving must land first,
+    // or it would undo the correction where it lands later.
+    mapper.CollectBundleAdjustment(/*wait=*/true);
     Correct(keyframe, *match, map, mapper);
     return true;
   }

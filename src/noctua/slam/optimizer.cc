@@ -199,18 +199,58 @@ int OptimizePose(Frame& frame, const ScalePyramid& pyramid, double bf, const Cen
   return inliers;
 }
 
-namespace {
+struct BundleAdjustment::Problem {
+  // The local keyframes and the fixed ones, which see the points but are not refined (nor is
+  // keyframe 0, the map's origin).
+  std::map<KeyFrame*, PoseBlock, KeyFrameIdLess> poses;
+  std::set<const KeyFrame*> refined;  // the local ones
+  std::vector<MapPoint*> points;
+  std::vector<std::array<double, 3>> positions;
+  struct Edge {
+    KeyFrame* keyframe;
+    std::size_t point;
+    Intrinsics intrinsics;
+    Observation observation;
+  };
+  std::vector<Edge> edges;
+  int iterations = 0;
+};
 
-// Refines the poses of `local_set` (but keyframe 0) and `points`; other keyframes that see the
-// points hold still. Observations that stay outliers are removed from the map.
-void AdjustKeyFramesAndPoints(const std::set<KeyFrame*, KeyFrameIdLess>& local_set,
-                              const std::vector<MapPoint*>& points, const ScalePyramid& pyramid,
-                              double bf, int iterations);
+BundleAdjustment::BundleAdjustment(const std::set<KeyFrame*, KeyFrameIdLess>& local_set,
+                                   std::vector<MapPoint*> points, const ScalePyramid& pyramid,
+                                   double bf, int iterations)
+    : problem_(std::make_unique<Problem>()) {
+  Problem& problem = *problem_;
+  problem.iterations = iterations;
+  std::set<KeyFrame*, KeyFrameIdLess> fixed_set;
+  for (MapPoint* point : points) {
+    for (const auto& [observer, index] : point->observations()) {
+      if (!observer->bad() && local_set.count(observer) == 0) fixed_set.insert(observer);
+    }
+  }
+  for (KeyFrame* k : local_set) {
+    problem.poses.emplace(k, PoseBlock(k->pose_cw()));
+    problem.refined.insert(k);
+  }
+  for (KeyFrame* k : fixed_set) problem.poses.emplace(k, PoseBlock(k->pose_cw()));
+  problem.positions.resize(points.size());
+  for (std::size_t p = 0; p < points.size(); ++p) {
+    const Eigen::Vector3d& x = points[p]->position();
+    problem.positions[p] = {x.x(), x.y(), x.z()};
+    for (const auto& [observer, index] : points[p]->observations()) {
+      if (observer->bad()) continue;
+      problem.edges.push_back({observer, p, IntrinsicsOf(observer->features(), bf),
+                               ObservationOf(observer->features(), index, pyramid)});
+    }
+  }
+  problem.points = std::move(points);
+}
 
-}  // namespace
+BundleAdjustment::~BundleAdjustment() = default;
 
-void LocalBundleAdjustment(KeyFrame* keyframe, const ScalePyramid& pyramid, double bf,
-                           int iterations, int max_covisibles) {
+std::unique_ptr<BundleAdjustment> BundleAdjustment::Local(KeyFrame* keyframe,
+                                                          const ScalePyramid& pyramid, double bf,
+                                                          int iterations, int max_covisibles) {
   // Local keyframes: this one and its covisible ones (the most covisible, when bounded); local
   // points: all they see.
   std::vector<KeyFrame*> local = {keyframe};
@@ -225,11 +265,13 @@ void LocalBundleAdjustment(KeyFrame* keyframe, const ScalePyramid& pyramid, doub
       points.push_back(point);
     }
   }
-  AdjustKeyFramesAndPoints(local_set, points, pyramid, bf, iterations);
+  return std::unique_ptr<BundleAdjustment>(
+      new BundleAdjustment(local_set, std::move(points), pyramid, bf, iterations));
 }
 
-void GlobalBundleAdjustment(const std::vector<KeyFrame*>& keyframes, const ScalePyramid& pyramid,
-                            double bf, int iterations) {
+std::unique_ptr<BundleAdjustment> BundleAdjustment::Global(const std::vector<KeyFrame*>& keyframes,
+                                                           const ScalePyramid& pyramid, double bf,
+                                                           int iterations) {
   std::set<KeyFrame*, KeyFrameIdLess> all;
   for (KeyFrame* k : keyframes) {
     if (!k->bad()) all.insert(k);
@@ -243,92 +285,86 @@ void GlobalBundleAdjustment(const std::vector<KeyFrame*>& keyframes, const Scale
       }
     }
   }
-  AdjustKeyFramesAndPoints(all, points, pyramid, bf, iterations);
+  return std::unique_ptr<BundleAdjustment>(
+      new BundleAdjustment(all, std::move(points), pyramid, bf, iterations));
 }
 
-namespace {
+const std::vector<MapPoint*>& BundleAdjustment::points() const { return problem_->points; }
 
-void AdjustKeyFramesAndPoints(const std::set<KeyFrame*, KeyFrameIdLess>& local_set,
-                              const std::vector<MapPoint*>& points, const ScalePyramid& pyramid,
-                              double bf, int iterations) {
-  // Fixed keyframes: they see local points but are not local.
-  std::set<KeyFrame*, KeyFrameIdLess> fixed_set;
-  for (MapPoint* point : points) {
-    for (const auto& [observer, index] : point->observations()) {
-      if (!observer->bad() && local_set.count(observer) == 0) fixed_set.insert(observer);
-    }
-  }
-  std::map<KeyFrame*, PoseBlock, KeyFrameIdLess> poses;
-  for (KeyFrame* k : local_set) poses.emplace(k, PoseBlock(k->pose_cw()));
-  for (KeyFrame* k : fixed_set) poses.emplace(k, PoseBlock(k->pose_cw()));
-  std::vector<std::array<double, 3>> positions(points.size());
-  for (std::size_t p = 0; p < points.size(); ++p) {
-    const Eigen::Vector3d& x = points[p]->position();
-    positions[p] = {x.x(), x.y(), x.z()};
-  }
-
+void BundleAdjustment::Solve() {
+  Problem& data = *problem_;
+  if (data.edges.empty()) return;
   ceres::Problem::Options problem_options;
   problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   ceres::Problem problem(problem_options);
   ceres::HuberLoss huber_mono(std::sqrt(kChi2Mono));
   ceres::HuberLoss huber_stereo(std::sqrt(kChi2Stereo));
-  for (auto& [k, block] : poses) {
+  for (auto& [k, block] : data.poses) {
     problem.AddParameterBlock(block.rotation.data(), 4, new LeftQuaternionManifold);
     problem.AddParameterBlock(block.translation.data(), 3);
-    if (fixed_set.count(k) > 0 || k->id() == 0) {
+    if (data.refined.count(k) == 0 || k->id() == 0) {
       problem.SetParameterBlockConstant(block.rotation.data());
       problem.SetParameterBlockConstant(block.translation.data());
     }
   }
-  struct Edge {
-    KeyFrame* keyframe;
-    std::size_t point;
-    Observation observation;
-  };
-  std::vector<Edge> edges;
-  for (std::size_t p = 0; p < points.size(); ++p) {
-    for (const auto& [observer, index] : points[p]->observations()) {
-      if (observer->bad()) continue;
-      const Intrinsics k = IntrinsicsOf(observer->features(), bf);
-      const Observation o = ObservationOf(observer->features(), index, pyramid);
-      PoseBlock& block = poses.at(observer);
-      if (o.stereo) {
-        problem.AddResidualBlock(new FullCost<3>(k, o), &huber_stereo, block.rotation.data(),
-                                 block.translation.data(), positions[p].data());
-      } else {
-        problem.AddResidualBlock(new FullCost<2>(k, o), &huber_mono, block.rotation.data(),
-                                 block.translation.data(), positions[p].data());
-      }
-      edges.push_back({observer, p, o});
+  for (const Problem::Edge& edge : data.edges) {
+    PoseBlock& block = data.poses.at(edge.keyframe);
+    double* position = data.positions[edge.point].data();
+    if (edge.observation.stereo) {
+      problem.AddResidualBlock(new FullCost<3>(edge.intrinsics, edge.observation), &huber_stereo,
+                               block.rotation.data(), block.translation.data(), position);
+    } else {
+      problem.AddResidualBlock(new FullCost<2>(edge.intrinsics, edge.observation), &huber_mono,
+                               block.rotation.data(), block.translation.data(), position);
     }
   }
-  if (edges.empty()) return;
   ceres::Solver::Summary summary;
-  ceres::Solve(SolverOptions(iterations, ceres::DENSE_SCHUR), &problem, &summary);
+  ceres::Solve(SolverOptions(data.iterations, ceres::DENSE_SCHUR), &problem, &summary);
+  solved_ = true;
+}
 
-  for (auto& [k, block] : poses) {
-    if (local_set.count(k) > 0) k->set_pose_cw(block.ToPose());
+void BundleAdjustment::Apply(const ScalePyramid& pyramid) {
+  const Problem& data = *problem_;
+  if (!solved_) return;
+  for (const auto& [k, block] : data.poses) {
+    if (data.refined.count(k) > 0 && !k->bad()) k->set_pose_cw(block.ToPose());
   }
-  for (std::size_t p = 0; p < points.size(); ++p) {
-    points[p]->set_position(Eigen::Vector3d(positions[p][0], positions[p][1], positions[p][2]));
+  for (std::size_t p = 0; p < data.points.size(); ++p) {
+    const std::array<double, 3>& x = data.positions[p];
+    if (!data.points[p]->bad()) data.points[p]->set_position(Eigen::Vector3d(x[0], x[1], x[2]));
   }
   // Observations that do not fit the refined map are removed (ORB-SLAM's post-BA cleanup).
-  for (const Edge& edge : edges) {
-    MapPoint* point = points[edge.point];
-    if (point->bad()) continue;
+  for (const Problem::Edge& edge : data.edges) {
+    MapPoint* point = data.points[edge.point];
+    if (point->bad() || edge.keyframe->bad()) continue;
     bool behind = false;
-    const double chi2 = Chi2(IntrinsicsOf(edge.keyframe->features(), bf), edge.observation,
-                             edge.keyframe->pose_cw(), point->position(), &behind);
+    const double chi2 = Chi2(edge.intrinsics, edge.observation, edge.keyframe->pose_cw(),
+                             point->position(), &behind);
     if (behind || chi2 > (edge.observation.stereo ? kChi2Stereo : kChi2Mono)) {
       const int index = edge.keyframe->IndexOf(point);
       if (index >= 0) edge.keyframe->SetMapPoint(index, nullptr);
       point->EraseObservation(edge.keyframe);
     }
   }
-  for (MapPoint* point : points) {
+  for (MapPoint* point : data.points) {
     if (!point->bad()) point->UpdateNormalAndDepth(pyramid);
   }
 }
 
-}  // namespace
+void LocalBundleAdjustment(KeyFrame* keyframe, const ScalePyramid& pyramid, double bf,
+                           int iterations, int max_covisibles) {
+  const std::unique_ptr<BundleAdjustment> adjustment =
+      BundleAdjustment::Local(keyframe, pyramid, bf, iterations, max_covisibles);
+  adjustment->Solve();
+  adjustment->Apply(pyramid);
+}
+
+void GlobalBundleAdjustment(const std::vector<KeyFrame*>& keyframes, const ScalePyramid& pyramid,
+                            double bf, int iterations) {
+  const std::unique_ptr<BundleAdjustment> adjustment =
+      BundleAdjustment::Global(keyframes, pyramid, bf, iterations);
+  adjustment->Solve();
+  adjustment->Apply(pyramid);
+}
+
 }  // namespace noctua::slam

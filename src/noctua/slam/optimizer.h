@@ -1,6 +1,9 @@
 #pragma once
 
 #include <limits>
+#include <memory>
+#include <set>
+#include <vector>
 
 #include "noctua/slam/frame.h"
 #include "noctua/slam/map.h"
@@ -42,6 +45,41 @@ struct PoseUncertainty {
   double rotation_sigma_deg = std::numeric_limits<double>::infinity();
 };
 PoseUncertainty EstimatePoseUncertainty(const Frame& frame, const ScalePyramid& pyramid, double bf);
+
+// A bundle adjustment in three steps, so that the solve (the slow part) can run on another
+// thread while tracking goes on with the map:
+//  - Local / Global copy the poses, positions and observations it needs from the map (on the
+//    thread that owns the map);
+//  - Solve refines those copies and touches nothing else;
+//  - Apply writes the result back (on the map's thread), leaving out keyframes and points that
+//    became bad since, and removes the observations that stay outliers.
+class BundleAdjustment {
+ public:
+  // See LocalBundleAdjustment and GlobalBundleAdjustment.
+  static std::unique_ptr<BundleAdjustment> Local(KeyFrame* keyframe, const ScalePyramid& pyramid,
+                                                 double bf, int iterations, int max_covisibles);
+  static std::unique_ptr<BundleAdjustment> Global(const std::vector<KeyFrame*>& keyframes,
+                                                  const ScalePyramid& pyramid, double bf,
+                                                  int iterations);
+  ~BundleAdjustment();
+  BundleAdjustment(const BundleAdjustment&) = delete;
+  BundleAdjustment& operator=(const BundleAdjustment&) = delete;
+
+  void Solve();
+  // Does nothing before Solve.
+  void Apply(const ScalePyramid& pyramid);
+  // The points it refines: whoever frees bad points must keep these until Apply.
+  const std::vector<MapPoint*>& points() const;
+
+ private:
+  struct Problem;
+  BundleAdjustment(const std::set<KeyFrame*, KeyFrameIdLess>& local_set,
+                   std::vector<MapPoint*> points, const ScalePyramid& pyramid, double bf,
+                   int iterations);
+
+  std::unique_ptr<Problem> problem_;
+  bool solved_ = false;
+};
 
 // Local bundle adjustment around `keyframe` (Ceres, Huber loss): the keyframe and its covisible
 // keyframes (at most `max_covisibles`, the most covisible first; 0: all) and all their points are

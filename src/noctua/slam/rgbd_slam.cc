@@ -74,7 +74,8 @@ TrackResult RgbdSlam::Track(Extracted extracted) {
   return result;
 }
 
-io::Trajectory RgbdSlam::Trajectory() const {
+io::Trajectory RgbdSlam::Trajectory() {
+  FinishMapping();
   std::vector<io::StampedPose> poses;
   for (const FrameRecord& record : tracker_.records()) {
     if (record.reference == nullptr) continue;
@@ -311,6 +312,7 @@ SequenceRun RunFrames(RgbdSlam& slam, io::FrameSource& source, const RunOptions&
     }
     if (run_options.progress) run_options.progress(i, count, run.frames.back());
   }
+  slam.FinishMapping();
   run.wall_s = run_watch.ElapsedMs() / 1000.0;
   run.dropped_frames = source.dropped();
   run.trajectory = slam.Trajectory();

@@ -46,8 +46,12 @@ class RgbdSlam {
   TrackResult Track(Extracted extracted);
 
   // T_world_camera of every tracked frame (lost frames and frames before the map exist are
-  // left out rather than guessed), with the latest keyframe poses.
-  io::Trajectory Trajectory() const;
+  // left out rather than guessed), with the latest keyframe poses (after the bundle adjustment
+  // still solving in the background, if any: FinishMapping).
+  io::Trajectory Trajectory();
+  // Lands the mapping still running in the background, so that the map is final (before saving
+  // or reading it at the end of a run).
+  void FinishMapping() { tracker_.FinishMapping(); }
   const Tracker& tracker() const { return tracker_; }
   // Starts from a saved map (Tracker::UseMap); before the first frame.
   void UseMap(Map map, bool localize) { tracker_.UseMap(std::move(map), localize); }

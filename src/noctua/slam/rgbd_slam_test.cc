@@ -91,6 +91,24 @@ TEST_F(RgbdSlamTest, TracksEveryFrameOfTheFirst100OfFr1) {
   }
 }
 
+// With the local bundle adjustment on its own thread (what `noctua slam` does), the same 100
+// frames: every frame tracked and the same error bound (measured 0.018-0.021 m over three runs
+// of the 200 frames against 0.0196 m in line); the last solve has landed when the run returns.
+TEST_F(RgbdSlamTest, TracksEveryFrameWithTheBundleAdjustmentInTheBackground) {
+  SlamOptions options = setup_->options;
+  options.background_bundle_adjustment = true;
+  RgbdSlam slam(setup_->camera.Camera(), Orb(*setup_), options);
+  RunOptions run_options;
+  run_options.max_frames = 100;
+  const SequenceRun run = RunSequence(slam, *sequence_, setup_->camera.depth_factor, run_options);
+  EXPECT_TRUE(run.lost_frames.empty());
+  EXPECT_EQ(run.trajectory.size(), 100u);
+  EXPECT_GE(run.keyframes, 3);
+  EXPECT_TRUE(slam.tracker().mapper().pending_points().empty());
+  const eval::AteResult ate = eval::ComputeAte(sequence_->ground_truth(), run.trajectory);
+  EXPECT_LT(ate.translation_m.rmse, 0.03);
+}
+
 // Points made by triangulation in a run: made, still in the map, and of those the ones whose
 // keypoint in their reference keyframe (as detected) lies left of `left_of_px`.
 struct TriangulatedCount {

@@ -140,6 +140,14 @@ struct SlamOptions {
   // (ATE 0.032 m) while 15, 20 and 30 all gave the same converged result (0.024 m).
   int local_ba_iterations = 20;
   bool local_ba = true;  // off: map points are never refined (for comparison)
+  // Solve each keyframe's local bundle adjustment on a thread of its own while tracking goes on
+  // (what ORB-SLAM's mapping thread spends its time on: 90 % of mapping on fr1/rpy, up to
+  // 110 ms per keyframe with orb); its result is applied at the first frame after it is ready,
+  // and at the latest before the next keyframe is mapped or a loop is corrected. A run then
+  // depends on the timing. Off: in line, so that a run is deterministic. Off by default for
+  // library callers (tests compare runs); `noctua slam` and noctua.run_slam turn it on unless
+  // asked to be deterministic (eval::SlamRunOptions::deterministic).
+  bool background_bundle_adjustment = false;
   // Covisible keyframes refined with a new keyframe, the most covisible first (0: all, as
   // ORB-SLAM). All grows with the map where a place is seen again: on tum_fr1_rpy_200 played
   // forward and back, mapping at frames 900-1000 cost 864 ms per frame with all and 97 ms with

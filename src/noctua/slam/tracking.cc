@@ -39,6 +39,7 @@ Tracker::Tracker(const SlamOptions& options)
 TrackResult Tracker::Track(Frame frame) {
   TrackResult result;
   current_ = std::make_unique<Frame>(std::move(frame));
+  mapper_.CollectBundleAdjustment(/*wait=*/false);
   Stopwatch watch;
   bool ok = false;
   if (state_ == TrackingState::kNotInitialised) {
@@ -173,7 +174,8 @@ bool Tracker::Coast(TrackResult& result) {
 void Tracker::ReclaimMapPoints() {
   const std::vector<MapPoint*> recent(mapper_.recent_points().begin(),
                                       mapper_.recent_points().end());
-  std::vector<const std::vector<MapPoint*>*> held = {&local_points_, &recent};
+  std::vector<const std::vector<MapPoint*>*> held = {&local_points_, &recent,
+                                                     &mapper_.pending_points()};
   for (const Frame* frame : {last_.get(), current_.get()}) {
     if (frame != nullptr) held.push_back(&frame->map_points);
   }
@@ -663,8 +665,9 @@ bool Tracker::NeedNewKeyFrame() const {
   }
   const bool need_close = tracked_close < 100 && untracked_close > 70;
   const double ratio = keyframes < 2 ? 0.4 : 0.75;
-  // Mapping runs in line here, so it is always idle: ORB-SLAM's condition c1b always holds and
-  // a keyframe is made whenever the tracked points thin out (c2).
+  // Mapping runs in line here (only its bundle adjustment may still be solving, and a new
+  // keyframe then waits its turn for one), so it is always idle: ORB-SLAM's condition c1b always
+  // holds and a keyframe is made whenever the tracked points thin out (c2).
   return (inliers_ < reference_matches * ratio || need_close) && inliers_ > 15;
 }
 

@@ -68,6 +68,9 @@ class Tracker {
   explicit Tracker(const SlamOptions& options);
 
   TrackResult Track(Frame frame);
+  // Applies the background bundle adjustment still solving, if any (waits for it), so that the
+  // map is final: before reading the trajectory or saving the map at the end of a run.
+  void FinishMapping() { mapper_.CollectBundleAdjustment(/*wait=*/true); }
 
   // Starts from a saved map (map_io.h) instead of a new one, before the first frame: that frame
   // is relocalised in the map. With `localize` the map stays exactly as loaded: no keyframes or
