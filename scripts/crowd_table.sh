@@ -36,7 +36,7 @@ run_one() {
   local dir=$out/runs/${method}_${mode}_b$b
   [ -e "$dir/report.json" ] && return 0
   local args=(slam --dataset "$crowd" --config "$config" --method "$method" --brightness "$b"
-              --out "$dir" --force --progress-every 1000)
+              --out "$dir" --force --progress-every 1000 --deterministic)
   case $mode in yolov8n | both) args+=(--detector "$detector") ;; esac
   case $mode in model-free | both) args+=(--reject-moving-points) ;; esac
   echo "crowd_table: $method, detector $mode, brightness $b" >&2

@@ -74,7 +74,7 @@ slam_one() {
   fi
   echo "lowlight_sweep: slam $method $sensor $level% seed $seed" >&2
   "$noctua" slam "${args[@]}" --config "$config" --method "$method" --max-frames "$frames" \
-    --out "$dir" --force --progress-every 100000 >/dev/null 2>"$dir.log" ||
+    --out "$dir" --force --progress-every 100000 --deterministic >/dev/null 2>"$dir.log" ||
     { echo "lowlight_sweep: $dir failed" >&2; return 1; }
 }
 

@@ -38,7 +38,7 @@ run_one() {
   [ -e "$dir/report.json" ] && return 0
   echo "slam_divergence: $1, brightness $2" >&2
   "$noctua" slam --dataset "$dataset" --config "$config" --method "$1" --brightness "$2" \
-    --out "$dir" --force --progress-every 100000 >/dev/null 2>"$dir.log" ||
+    --out "$dir" --force --progress-every 100000 --deterministic >/dev/null 2>"$dir.log" ||
     { echo "slam_divergence: $dir failed (see $dir.log)" >&2; return 1; }
 }
 export -f run_one

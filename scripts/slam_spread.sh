@@ -68,7 +68,7 @@ xargs -P "$jobs" -L 1 bash -c '
   [ -e "$run/report.json" ] && exit 0
   name=$method; [ "$method" = paper-strict ] && name=paper
   "$noctua" slam --dataset "$sequence" --config "$config" --method "$name" "$option" \
-    --out "$run" --force --progress-every 1000 >/dev/null 2>"$run.log" ||
+    --out "$run" --force --progress-every 1000 --deterministic >/dev/null 2>"$run.log" ||
     { echo "slam_spread: $run failed, see $run.log" >&2; exit 255; }
   echo "slam_spread: done $method, $light, $variant" >&2' <"$runs"
 

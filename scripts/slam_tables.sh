@@ -39,7 +39,8 @@ for light in normal 30 15 person; do
   esac
   for method in orb clahe-orb paper paper+yolov8n; do
     run=$out/$light/$method
-    args=(--dataset "$sequence" --config "$config" --out "$run" --force --progress-every 50)
+    args=(--dataset "$sequence" --config "$config" --out "$run" --force --progress-every 50
+          --deterministic)
     if [ "$method" = paper+yolov8n ]; then
       args+=(--method paper --detector "$detector")
     else
