@@ -388,14 +388,7 @@ std::vector<StageTiming> SummarizeStages(const std::vector<slam::FrameOutcome>& 
     for (double sample : samples) sum += sample;
     const double mean = samples.empty() ? 0.0 : sum / static_cast<double>(samples.size());
     const TimingSummary summary = Summarize(samples);
-    double p95 = 0.0;
-    if (!samples.empty()) {
-      std::sort(samples.begin(), samples.end());
-      const auto rank =
-          static_cast<std::size_t>(std::ceil(0.95 * static_cast<double>(samples.size())));
-      p95 = samples[std::max<std::size_t>(rank, 1) - 1];
-    }
-    timing.push_back({stage, summary.median_ms, mean, p95, summary.max_ms});
+    timing.push_back({stage, summary.median_ms, mean, summary.p95_ms, summary.max_ms});
   }
   return timing;
 }

@@ -131,7 +131,7 @@ struct StageTiming {
   std::string stage;
   double median_ms = 0.0;
   double mean_ms = 0.0;
-  double p95_ms = 0.0;  // 95th percentile (nearest rank)
+  double p95_ms = 0.0;  // 95th percentile (Summarize)
   double max_ms = 0.0;
 };
 std::vector<StageTiming> SummarizeStages(const std::vector<slam::FrameOutcome>& frames,

@@ -68,7 +68,7 @@ TEST(SummarizeStagesTest, MedianMeanAndMaxOverTheFramesThatHaveTheStage) {
   EXPECT_EQ(timing[0].stage, "track");
   EXPECT_DOUBLE_EQ(timing[0].median_ms, 2.0);
   EXPECT_DOUBLE_EQ(timing[0].mean_ms, 3.0);
-  EXPECT_DOUBLE_EQ(timing[0].p95_ms, 6.0);
+  EXPECT_DOUBLE_EQ(timing[0].p95_ms, 5.6);  // interpolated between 2 and 6
   EXPECT_DOUBLE_EQ(timing[0].max_ms, 6.0);
   EXPECT_DOUBLE_EQ(timing[1].mean_ms, 30.0);  // only the keyframe has a mapping time
 }

@@ -11,7 +11,6 @@
 
 #include "noctua/slam/matcher.h"
 #include "noctua/slam/optimizer.h"
-#include "noctua/util/timer.h"
 
 namespace noctua::slam {
 namespace {
@@ -91,9 +90,7 @@ bool LocalMapper::CollectBundleAdjustment(bool wait) {
       if (!wait && solving_.wait_for(std::chrono::seconds(0)) != std::future_status::ready) {
         return false;
       }
-      const Stopwatch watch;
       solving_.get();  // rethrows what the solve threw
-      bundle_adjustment_wait_ms_ += watch.ElapsedMs();
       pending_adjustment_->Apply(pyramid_);
       pending_adjustment_.reset();
     }

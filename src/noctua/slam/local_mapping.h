@@ -35,8 +35,6 @@ class LocalMapper {
   bool CollectBundleAdjustment(bool wait);
   // The points of the pending bundle adjustment (empty without one): they must not be freed.
   const std::vector<MapPoint*>& pending_points() const;
-  // Milliseconds the tracking thread waited for background bundle adjustments, in all.
-  double bundle_adjustment_wait_ms() const { return bundle_adjustment_wait_ms_; }
   // New points still on probation (culled if rarely matched): the mapper holds them.
   const std::list<MapPoint*>& recent_points() const { return recent_points_; }
   // Points made by triangulation so far, whether culled since or not.
@@ -84,7 +82,6 @@ class LocalMapper {
   std::unique_ptr<BundleAdjustment> pending_adjustment_;
   std::future<void> solving_;
   KeyFrame* adjustment_due_ = nullptr;  // mapped while another was solving: adjusted next
-  double bundle_adjustment_wait_ms_ = 0.0;
 };
 
 }  // namespace noctua::slam

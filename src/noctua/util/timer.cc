@@ -24,6 +24,7 @@ TimingSummary Summarize(std::vector<double> samples_ms) {
   summary.median_ms = Percentile(samples_ms, 0.5);
   summary.p10_ms = Percentile(samples_ms, 0.1);
   summary.p90_ms = Percentile(samples_ms, 0.9);
+  summary.p95_ms = Percentile(samples_ms, 0.95);
   summary.max_ms = samples_ms.back();
   return summary;
 }

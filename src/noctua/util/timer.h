@@ -24,11 +24,13 @@ struct TimingSummary {
   double median_ms = 0.0;
   double p10_ms = 0.0;
   double p90_ms = 0.0;
+  double p95_ms = 0.0;  // a run's slow frames, short of its single worst
   double max_ms = 0.0;
   int count = 0;
 };
 
-// Median, 10th and 90th percentiles and maximum of samples; all zero for no samples.
+// Median, 10th, 90th and 95th percentiles (interpolated) and maximum of samples; all zero for no
+// samples.
 TimingSummary Summarize(std::vector<double> samples_ms);
 
 }  // namespace noctua

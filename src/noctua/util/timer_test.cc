@@ -17,6 +17,7 @@ TEST(Summarize, PercentilesAndMaximum) {
   EXPECT_EQ(summary.count, 101);
   EXPECT_DOUBLE_EQ(summary.p10_ms, 10.0);
   EXPECT_DOUBLE_EQ(summary.p90_ms, 90.0);
+  EXPECT_DOUBLE_EQ(summary.p95_ms, 95.0);
   EXPECT_DOUBLE_EQ(summary.max_ms, 100.0);
 }
 
