@@ -31,7 +31,9 @@ version=$("$prefix/bin/noctua" --version) || fail "noctua --version"
 for unwanted in include/noctua/testing include/noctua/fuzz include/noctua/slam/reprojection_cost.h; do
   [ ! -e "$prefix/$unwanted" ] || fail "$unwanted is installed"
 done
-if find "$prefix" -name '*_test*' | grep -q .; then fail "test files are installed"; fi
+# No pipes into an early-exiting reader here: under pipefail the writer's SIGPIPE fails the script.
+test_files=$(find "$prefix" -name '*_test*')
+[ -z "$test_files" ] || fail "test files are installed: $test_files"
 [ -f "$prefix/share/noctua/vocabulary/default.vocab" ] || fail "the default vocabulary is not installed"
 
 echo "check_package: building examples/ against the installed package"
@@ -40,7 +42,9 @@ cmake -S examples -B "$work/examples" -DCMAKE_PREFIX_PATH="$prefix" >"$work/exam
 cmake --build "$work/examples" --parallel "$(nproc)" >>"$work/examples.log" 2>&1 ||
   { cat "$work/examples.log"; fail "building examples/"; }
 
-frame=$(find "$sequence/rgb" -name '*.png' | sort | head -n 1)
+frames=("$sequence"/rgb/*.png) # a glob expands sorted
+frame=${frames[0]}
+[ -f "$frame" ] || fail "no PNG frame in $sequence/rgb"
 output=$("$work/examples/extract_keypoints" "$frame") || fail "extract_keypoints $frame"
 echo "  extract_keypoints: $output"
 keypoints=$(sed -n 's/.*: \([0-9]*\) keypoints.*/\1/p' <<<"$output")
