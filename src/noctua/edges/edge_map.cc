@@ -199,10 +199,9 @@ cv::Mat EnlargeEdgeMap(const cv::Mat& edges, const PhaseCongruency& pc, cv::Size
   const auto scale = static_cast<float>(factor);
   const int rows = edges.rows;
   const int cols = edges.cols;
-  // Where each edge pixel lands in the full map, written (and read) at edge pixels only: a
-  // scratch matrix each thread reuses frame after frame.
-  thread_local cv::Mat placed;
-  placed.create(edges.size(), CV_32SC2);
+  // Where each edge pixel lands in the full map, written (and read) at edge pixels only, so it
+  // is never cleared. (Not kept per thread: the extractor makes each edge map on a new thread.)
+  cv::Mat placed(edges.size(), CV_32SC2);
   std::vector<cv::Point> edge_pixels;
   cv::findNonZero(edges, edge_pixels);
   cv::Mat full = cv::Mat::zeros(full_size, CV_8U);

@@ -68,33 +68,6 @@ cv::Mat ToFloatGray(const cv::Mat& gray, int min_size) {
   return result;
 }
 
-// Scratch matrices of the fast variant for one thread. Reused frame after frame: at a fixed
-// size nothing is allocated, which saves the page faults of ~10 MB of fresh buffers per frame
-// (about a tenth of the time, measured).
-struct FastWorkspace {
-  cv::Mat full;
-  cv::Mat image;
-  cv::Mat complex_image;
-  cv::Mat image_fft;
-  cv::Mat spectrum;
-  cv::Mat packed;
-  cv::Mat spare;
-  std::vector<cv::Mat> even;
-  std::vector<cv::Mat> odd;
-  cv::Mat sum_an;
-  cv::Mat max_an;
-  cv::Mat sum_f;
-  cv::Mat sum_h1;
-  cv::Mat sum_h2;
-  cv::Mat pc;
-  cv::Mat orientation;
-};
-
-FastWorkspace& ThreadWorkspace() {
-  thread_local FastWorkspace workspace;
-  return workspace;
-}
-
 void Zeros(cv::Mat& mat, int rows, int cols) {
   mat.create(rows, cols, CV_32F);
   mat.setTo(0.0f);
@@ -377,15 +350,65 @@ PhaseCongruency ComputePhaseCongruency(const cv::Mat& gray, const PhaseCongruenc
   return result;
 }
 
+// Scratch matrices of the fast variant for one call. Reused call after call: at a fixed size
+// nothing is allocated, which saves the page faults of ~10 MB of fresh buffers per frame.
+struct FastPhaseCongruency::Workspace {
+  cv::Mat full;
+  cv::Mat image;
+  cv::Mat complex_image;
+  cv::Mat image_fft;
+  cv::Mat spectrum;
+  cv::Mat packed;
+  cv::Mat spare;
+  std::vector<cv::Mat> even;
+  std::vector<cv::Mat> odd;
+  cv::Mat sum_an;
+  cv::Mat max_an;
+  cv::Mat sum_f;
+  cv::Mat sum_h1;
+  cv::Mat sum_h2;
+  cv::Mat pc;
+  cv::Mat orientation;
+};
+
 // The filter bank and FFT plans of the fast variant for one image size: per scale, the radial
 // log-Gabor filter and its product with the Riesz kernel H = (i u - v) / |f|, both scaled by 1/N
-// so that the inverse FFTs come out normalised.
+// so that the inverse FFTs come out normalised. Also the idle workspaces: they belong to the
+// instance, not to a thread, since callers (the extractor) run each frame's edge map on a new
+// thread, where buffers kept per thread would be allocated afresh every frame.
 struct FastPhaseCongruency::FilterCache {
   std::mutex mutex;
   cv::Size size;
   std::shared_ptr<const ComplexFft2d> fft;
   std::vector<cv::Mat> log_gabor;        // CV_32F
   std::vector<cv::Mat> log_gabor_riesz;  // CV_32FC2
+  std::vector<std::unique_ptr<Workspace>> idle_workspaces;
+};
+
+// A workspace taken from the instance's idle ones (or a new one) for one call, and given back.
+class FastPhaseCongruency::WorkspaceLease {
+ public:
+  explicit WorkspaceLease(FilterCache& cache) : cache_(cache) {
+    std::lock_guard<std::mutex> lock(cache_.mutex);
+    if (cache_.idle_workspaces.empty()) {
+      workspace_ = std::make_unique<Workspace>();
+    } else {
+      workspace_ = std::move(cache_.idle_workspaces.back());
+      cache_.idle_workspaces.pop_back();
+    }
+  }
+  ~WorkspaceLease() {
+    std::lock_guard<std::mutex> lock(cache_.mutex);
+    cache_.idle_workspaces.push_back(std::move(workspace_));
+  }
+  WorkspaceLease(const WorkspaceLease&) = delete;
+  WorkspaceLease& operator=(const WorkspaceLease&) = delete;
+
+  Workspace& operator*() const { return *workspace_; }
+
+ private:
+  FilterCache& cache_;
+  std::unique_ptr<Workspace> workspace_;
 };
 
 FastPhaseCongruency::FastPhaseCongruency(const FastPhaseCongruencyOptions& options)
@@ -397,10 +420,10 @@ FastPhaseCongruency::~FastPhaseCongruency() = default;
 
 PhaseCongruency FastPhaseCongruency::Compute(const cv::Mat& gray) const {
   if (options_.downscale == 1) return ComputeAtWorkingSize(gray);
-  // The working-size results go to this thread's scratch, since only their interpolation is
-  // returned.
-  FastWorkspace& ws = ThreadWorkspace();
-  ComputeInto(gray, ws.pc, ws.orientation);
+  // The working-size results go to the scratch, since only their interpolation is returned.
+  const WorkspaceLease lease(*cache_);
+  Workspace& ws = *lease;
+  ComputeInto(gray, ws, ws.pc, ws.orientation);
   PhaseCongruency result;
   cv::resize(ws.pc, result.max_moment, gray.size(), 0, 0, cv::INTER_LINEAR);
   cv::resize(ws.orientation, result.orientation, gray.size(), 0, 0, cv::INTER_NEAREST);
@@ -409,15 +432,15 @@ PhaseCongruency FastPhaseCongruency::Compute(const cv::Mat& gray) const {
 
 PhaseCongruency FastPhaseCongruency::ComputeAtWorkingSize(const cv::Mat& gray) const {
   PhaseCongruency result;
-  ComputeInto(gray, result.max_moment, result.orientation);
+  const WorkspaceLease lease(*cache_);
+  ComputeInto(gray, *lease, result.max_moment, result.orientation);
   return result;
 }
 
-void FastPhaseCongruency::ComputeInto(const cv::Mat& gray, cv::Mat& pc,
+void FastPhaseCongruency::ComputeInto(const cv::Mat& gray, Workspace& ws, cv::Mat& pc,
                                       cv::Mat& orientation) const {
   const FastPhaseCongruencyOptions& o = options_;
   CheckGray(gray, kMinPhaseCongruencySize * o.downscale);
-  FastWorkspace& ws = ThreadWorkspace();
   gray.convertTo(ws.full, CV_32F);
   const cv::Mat& full = ws.full;
   if (o.downscale > 1) {

@@ -76,7 +76,8 @@ struct FastPhaseCongruencyOptions {
 
 // The fast variant. Holds the filter bank and FFT plans for the last image size; thread-safe
 // (the cache is guarded), so one instance can serve an extractor used from several threads.
-// Each calling thread keeps its scratch buffers (about 10 MB at 640x480) for reuse.
+// The instance keeps the scratch buffers (about 10 MB at 640x480) of its calls for reuse, one
+// set per call running at the same time, whichever thread makes the call.
 class FastPhaseCongruency {
  public:
   explicit FastPhaseCongruency(const FastPhaseCongruencyOptions& options = {});
@@ -98,8 +99,11 @@ class FastPhaseCongruency {
 
  private:
   struct FilterCache;
-  // Writes PC and orientation at the working size into the given matrices (allocated as needed).
-  void ComputeInto(const cv::Mat& gray, cv::Mat& pc, cv::Mat& orientation) const;
+  struct Workspace;
+  class WorkspaceLease;
+  // Writes PC and orientation at the working size into the given matrices (allocated as needed),
+  // with `ws` as scratch.
+  void ComputeInto(const cv::Mat& gray, Workspace& ws, cv::Mat& pc, cv::Mat& orientation) const;
 
   FastPhaseCongruencyOptions options_;
   std::unique_ptr<FilterCache> cache_;

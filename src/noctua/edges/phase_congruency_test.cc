@@ -3,8 +3,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <future>
 #include <numbers>
 #include <opencv2/imgproc.hpp>
+#include <vector>
 
 #include "noctua/util/error.h"
 
@@ -255,6 +257,28 @@ TEST(PhaseCongruency, FastVariantReusesItsFiltersAcrossSizes) {
   EXPECT_EQ(fast.Compute(b).max_moment.size(), b.size());
   // Back to the first size: the rebuilt filters give the same result.
   EXPECT_EQ(cv::norm(first, fast.Compute(a).max_moment, cv::NORM_INF), 0.0);
+}
+
+// Each call borrows scratch buffers from the instance: calls running at once on other threads
+// (as the extractor makes them) must each get their own, and give what one call alone gives.
+TEST(PhaseCongruency, FastVariantCallsAtOnceFromNewThreadsAgreeWithCallsOneAtATime) {
+  FastPhaseCongruency fast{FastPhaseCongruencyOptions()};
+  std::vector<cv::Mat> images;
+  std::vector<cv::Mat> alone;
+  for (int seed = 1; seed <= 4; ++seed) {
+    images.push_back(Noisy(VerticalStep(), seed));
+    alone.push_back(fast.Compute(images.back()).max_moment.clone());
+  }
+  for (int round = 0; round < 3; ++round) {
+    std::vector<std::future<cv::Mat>> running;
+    for (const cv::Mat& image : images) {
+      running.push_back(std::async(std::launch::async,
+                                   [&fast, image] { return fast.Compute(image).max_moment; }));
+    }
+    for (std::size_t i = 0; i < images.size(); ++i) {
+      EXPECT_EQ(cv::norm(alone[i], running[i].get(), cv::NORM_INF), 0.0) << "image " << i;
+    }
+  }
 }
 
 TEST(PhaseCongruencyOptions, CheckRejectsBadValues) {
