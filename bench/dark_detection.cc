@@ -3,11 +3,14 @@
 // Reference boxes are the detector's own person boxes at normal light with score >= 0.5 (the
 // frames have no labels); a dark frame finds a reference person when one of its person boxes
 // has IoU >= 0.5 with it. Frames: the 16 fr3 walking_rpy frames and the 120 bonn_crowd frames,
-// darkened to LEVEL (default 0.15) as single frames (no motion blur: no depth for fr3), seed =
-// frame index. Prints a Markdown table. Usage: dark_detection [LEVEL]
+// darkened to LEVEL (default 0.15) as single frames (no motion blur: no depth for fr3), each with
+// SEEDS noise draws (default 1; draw s of frame k has seed k + 1 + 1000 s, so draw 0 is the
+// earlier single-seed table). Prints a Markdown table of recall, mean (min-max) over the draws.
+// Usage: dark_detection [LEVEL] [SEEDS]
 #include <algorithm>
 #include <filesystem>
 #include <iostream>
+#include <numeric>
 #include <string>
 #include <vector>
 
@@ -71,12 +74,14 @@ struct Mode {
 
 int main(int argc, char** argv) {
   const double level = argc > 1 ? std::stod(argv[1]) : 0.15;
+  const int seeds = argc > 2 ? std::max(1, std::stoi(argv[2])) : 1;
   const fs::path model = noctua::testing::ModelsDir() / "yolov8n" / "yolov8n_head_f32.onnx";
-  const std::vector<Mode> modes = {{"none", false, DarkEnhancement::kGain, 0.0},
-                                   {"gain", true, DarkEnhancement::kGain, 0.0},
-                                   {"gamma", true, DarkEnhancement::kGamma, 0.0},
-                                   {"smooth-gain 1.5", true, DarkEnhancement::kSmoothGain, 1.5},
-                                   {"smooth-gain 3 (default)", true, DarkEnhancement::kSmoothGain, 3.0}};
+  const std::vector<Mode> modes = {
+      {"none", false, DarkEnhancement::kGain, 0.0},
+      {"gain", true, DarkEnhancement::kGain, 0.0},
+      {"gamma", true, DarkEnhancement::kGamma, 0.0},
+      {"smooth-gain 1.5", true, DarkEnhancement::kSmoothGain, 1.5},
+      {"smooth-gain 3 (default)", true, DarkEnhancement::kSmoothGain, 3.0}};
   std::vector<std::unique_ptr<noctua::dynamic::Detector>> detectors;
   for (const Mode& mode : modes) {
     noctua::dynamic::DetectorOptions options;
@@ -100,15 +105,33 @@ int main(int argc, char** argv) {
     }
     for (const noctua::sim::SensorModel& sensor : noctua::sim::SensorModels()) {
       if (!sensor.shot_noise) continue;
-      std::vector<int> hits(modes.size(), 0);
-      for (std::size_t k = 0; k < frames.size(); ++k) {
-        const cv::Mat dark = noctua::sim::DarkenToLevel(frames[k], level, sensor, k + 1);
+      // recall[m][s]: mode m, noise draw s.
+      std::vector<std::vector<double>> recall(modes.size());
+      for (int s = 0; s < seeds; ++s) {
+        std::vector<int> hits(modes.size(), 0);
+        for (std::size_t k = 0; k < frames.size(); ++k) {
+          const cv::Mat dark = noctua::sim::DarkenToLevel(
+              frames[k], level, sensor, k + 1 + 1000 * static_cast<std::size_t>(s));
+          for (std::size_t m = 0; m < modes.size(); ++m) {
+            hits[m] += Found(reference[k], People(detectors[m]->Detect(dark), 0.0f));
+          }
+        }
         for (std::size_t m = 0; m < modes.size(); ++m) {
-          hits[m] += Found(reference[k], People(detectors[m]->Detect(dark), 0.0f));
+          recall[m].push_back(hits[m] / std::max(1.0, 1.0 * total));
         }
       }
       std::cout << "| " << set << " (" << frames.size() << ") | " << sensor.name << " | " << total;
-      for (const int h : hits) std::cout << cv::format(" | %.3f", h / std::max(1.0, 1.0 * total));
+      for (const std::vector<double>& r : recall) {
+        const double mean =
+            std::accumulate(r.begin(), r.end(), 0.0) / static_cast<double>(r.size());
+        if (seeds == 1) {
+          std::cout << cv::format(" | %.3f", mean);
+        } else {
+          std::cout << cv::format(" | %.3f (%.3f-%.3f)", mean,
+                                  *std::min_element(r.begin(), r.end()),
+                                  *std::max_element(r.begin(), r.end()));
+        }
+      }
       std::cout << " |" << std::endl;
     }
   }
