@@ -373,33 +373,38 @@ struct FastPhaseCongruency::Workspace {
 
 // The filter bank and FFT plans of the fast variant for one image size: per scale, the radial
 // log-Gabor filter and its product with the Riesz kernel H = (i u - v) / |f|, both scaled by 1/N
-// so that the inverse FFTs come out normalised. Also the idle workspaces: they belong to the
-// instance, not to a thread, since callers (the extractor) run each frame's edge map on a new
-// thread, where buffers kept per thread would be allocated afresh every frame.
+// so that the inverse FFTs come out normalised.
 struct FastPhaseCongruency::FilterCache {
   std::mutex mutex;
   cv::Size size;
   std::shared_ptr<const ComplexFft2d> fft;
   std::vector<cv::Mat> log_gabor;        // CV_32F
   std::vector<cv::Mat> log_gabor_riesz;  // CV_32FC2
-  std::vector<std::unique_ptr<Workspace>> idle_workspaces;
 };
 
-// A workspace taken from the instance's idle ones (or a new one) for one call, and given back.
+// The workspaces no call is using. They belong to the instance, not to a thread: callers (the
+// extractor) run each frame's edge map on a new thread, where buffers kept per thread would be
+// allocated afresh every frame.
+struct FastPhaseCongruency::WorkspacePool {
+  std::mutex mutex;
+  std::vector<std::unique_ptr<Workspace>> idle;
+};
+
+// A workspace taken from the pool (or a new one) for one call, and given back.
 class FastPhaseCongruency::WorkspaceLease {
  public:
-  explicit WorkspaceLease(FilterCache& cache) : cache_(cache) {
-    std::lock_guard<std::mutex> lock(cache_.mutex);
-    if (cache_.idle_workspaces.empty()) {
+  explicit WorkspaceLease(WorkspacePool& pool) : pool_(pool) {
+    std::lock_guard<std::mutex> lock(pool_.mutex);
+    if (pool_.idle.empty()) {
       workspace_ = std::make_unique<Workspace>();
     } else {
-      workspace_ = std::move(cache_.idle_workspaces.back());
-      cache_.idle_workspaces.pop_back();
+      workspace_ = std::move(pool_.idle.back());
+      pool_.idle.pop_back();
     }
   }
   ~WorkspaceLease() {
-    std::lock_guard<std::mutex> lock(cache_.mutex);
-    cache_.idle_workspaces.push_back(std::move(workspace_));
+    std::lock_guard<std::mutex> lock(pool_.mutex);
+    pool_.idle.push_back(std::move(workspace_));
   }
   WorkspaceLease(const WorkspaceLease&) = delete;
   WorkspaceLease& operator=(const WorkspaceLease&) = delete;
@@ -407,12 +412,14 @@ class FastPhaseCongruency::WorkspaceLease {
   Workspace& operator*() const { return *workspace_; }
 
  private:
-  FilterCache& cache_;
+  WorkspacePool& pool_;
   std::unique_ptr<Workspace> workspace_;
 };
 
 FastPhaseCongruency::FastPhaseCongruency(const FastPhaseCongruencyOptions& options)
-    : options_(options), cache_(std::make_unique<FilterCache>()) {
+    : options_(options),
+      cache_(std::make_unique<FilterCache>()),
+      workspaces_(std::make_unique<WorkspacePool>()) {
   options_.Check();
 }
 
@@ -421,7 +428,7 @@ FastPhaseCongruency::~FastPhaseCongruency() = default;
 PhaseCongruency FastPhaseCongruency::Compute(const cv::Mat& gray) const {
   if (options_.downscale == 1) return ComputeAtWorkingSize(gray);
   // The working-size results go to the scratch, since only their interpolation is returned.
-  const WorkspaceLease lease(*cache_);
+  const WorkspaceLease lease(*workspaces_);
   Workspace& ws = *lease;
   ComputeInto(gray, ws, ws.pc, ws.orientation);
   PhaseCongruency result;
@@ -432,7 +439,7 @@ PhaseCongruency FastPhaseCongruency::Compute(const cv::Mat& gray) const {
 
 PhaseCongruency FastPhaseCongruency::ComputeAtWorkingSize(const cv::Mat& gray) const {
   PhaseCongruency result;
-  const WorkspaceLease lease(*cache_);
+  const WorkspaceLease lease(*workspaces_);
   ComputeInto(gray, *lease, result.max_moment, result.orientation);
   return result;
 }

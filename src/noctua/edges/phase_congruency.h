@@ -100,6 +100,7 @@ class FastPhaseCongruency {
  private:
   struct FilterCache;
   struct Workspace;
+  struct WorkspacePool;
   class WorkspaceLease;
   // Writes PC and orientation at the working size into the given matrices (allocated as needed),
   // with `ws` as scratch.
@@ -107,6 +108,7 @@ class FastPhaseCongruency {
 
   FastPhaseCongruencyOptions options_;
   std::unique_ptr<FilterCache> cache_;
+  std::unique_ptr<WorkspacePool> workspaces_;
 };
 
 }  // namespace noctua::edges
