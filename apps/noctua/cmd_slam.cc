@@ -154,8 +154,16 @@ void AddSlamCommand(CLI::App& app) {
                     "Keep points that move against the static world out of tracking and mapping, "
                     "found from geometry alone (no detector needed; docs/slam.md, Moving points)");
   command->add_flag("--deterministic", args->run.deterministic,
-                    "Run the local bundle adjustment in line instead of on its own thread: the "
-                    "same result every run, at the cost of slower keyframes (docs/slam.md)");
+                    "Run the local bundle adjustment in line instead of on its own thread, and "
+                    "map each keyframe when it is made: the same result every run, at the cost "
+                    "of slower keyframes (docs/slam.md)");
+  command
+      ->add_option("--mapping-slice", args->run.mapping_slice_ms,
+                   "Map each keyframe stage by stage over the frames after it, about this many ms "
+                   "after each frame; 0: all of it in the frame that makes the keyframe "
+                   "(docs/slam.md, Mapping in slices)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
   command->add_flag("--no-loop-closing", args->run.no_loop_closing,
                     "Do not look for loops (docs/slam.md, Loop closing)");
   viz::ViewerOptions& viewer = args->run.viewer;

@@ -37,6 +37,7 @@ nlohmann::json RunJson(const SlamRunOptions& options, const SlamRunReport& repor
   json["reject_moving_points"] = options.reject_moving_points;
   json["no_loop_closing"] = options.no_loop_closing;
   json["deterministic"] = options.deterministic;
+  json["mapping_slice_ms"] = options.deterministic ? 0.0 : options.mapping_slice_ms;
   json["frames"] = run.frames.size();
   json["tracked_frames"] = run.trajectory.size();
   json["lost_frames"] = run.lost_frames.size();
@@ -152,6 +153,7 @@ void AddTrajectoryErrors(const io::Trajectory& ground_truth, SlamRunReport& repo
 void SlamRunOptions::Check() const {
   CheckOption(brightness > 0.0 && brightness <= 1.0, "brightness must be in (0, 1]");
   CheckOption(max_frames >= 0, "max_frames must not be negative");
+  CheckOption(mapping_slice_ms >= 0.0, "mapping_slice_ms must not be negative");
   CheckOption(detect_every >= 1, "detect_every must be at least 1");
   sim::SensorModelByName(sensor);  // throws for an unknown name, listing the known ones
   CheckOption(!config.empty(), "the SLAM needs a settings file (a camera preset, see config/)");
@@ -173,6 +175,7 @@ slam::SlamSetup CheckedSetup(const SlamRunOptions& options) {
   setup.options.reject_moving_points = options.reject_moving_points;
   if (options.no_loop_closing) setup.options.loop_closing.enabled = false;
   setup.options.background_bundle_adjustment = !options.deterministic;
+  if (!options.deterministic) setup.options.mapping_slice_ms = options.mapping_slice_ms;
   if (!options.vocabulary.empty()) setup.options.vocabulary = options.vocabulary;
   return setup;
 }

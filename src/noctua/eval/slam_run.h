@@ -38,6 +38,9 @@ struct SlamRunOptions {
   // Local bundle adjustment in line instead of on its own thread, so that a run gives the same
   // result every time (slam::SlamOptions::background_bundle_adjustment, on unless this is set).
   bool deterministic = false;
+  // Unless deterministic: the mapping of each keyframe runs stage by stage for about this many ms
+  // after each frame (slam::SlamOptions::mapping_slice_ms); 0: all of it when the keyframe is made.
+  double mapping_slice_ms = slam::kBackgroundMappingSliceMs;
   // The detector: on a thread of its own on every detect_every-th frame, unless detect_inline
   // (in the extraction, every frame).
   int detect_every = dynamic::AsyncMaskOptions().every_n;

@@ -115,6 +115,11 @@ const std::vector<MapPoint*>& LocalMapper::pending_points() const {
 }
 
 void LocalMapper::ProcessKeyFrame(KeyFrame* keyframe, Map& map) {
+  BeginKeyFrame(keyframe);
+  for (const MappingStage stage : kMappingStages) RunStage(stage, keyframe, map);
+}
+
+void LocalMapper::BeginKeyFrame(KeyFrame* keyframe) {
   for (int i = 0; i < keyframe->features().size(); ++i) {
     MapPoint* point = keyframe->map_point(i);
     if (point == nullptr) continue;
@@ -131,23 +136,43 @@ void LocalMapper::ProcessKeyFrame(KeyFrame* keyframe, Map& map) {
     }
   }
   keyframe->UpdateConnections();
-  CullRecentPoints(keyframe);
-  if (options_.triangulation.enabled) CreateTriangulatedPoints(keyframe, map);
-  if (options_.fuse_neighbours) FuseWithNeighbours(keyframe);
-  if (options_.local_ba && options_.background_bundle_adjustment) {
-    // One solve at a time, each from the map as the last one left it: while one is running,
-    // the latest keyframe waits its turn (its window covers those before it, which are then
-    // not adjusted on their own, as when ORB-SLAM's mapping falls behind).
-    if (pending_adjustment_ == nullptr) {
-      StartBundleAdjustment(keyframe);
-    } else {
-      adjustment_due_ = keyframe;
-    }
-  } else if (options_.local_ba) {
+}
+
+void LocalMapper::RunStage(MappingStage stage, KeyFrame* keyframe, Map& map) {
+  switch (stage) {
+    case MappingStage::kCullRecentPoints:
+      CullRecentPoints(keyframe);
+      return;
+    case MappingStage::kTriangulate:
+      if (options_.triangulation.enabled) CreateTriangulatedPoints(keyframe, map);
+      return;
+    case MappingStage::kFuse:
+      if (options_.fuse_neighbours) FuseWithNeighbours(keyframe);
+      return;
+    case MappingStage::kBundleAdjust:
+      BundleAdjust(keyframe);
+      return;
+    case MappingStage::kCullKeyFrames:
+      CullRedundantKeyFrames(keyframe);
+      return;
+  }
+}
+
+void LocalMapper::BundleAdjust(KeyFrame* keyframe) {
+  if (!options_.local_ba) return;
+  if (!options_.background_bundle_adjustment) {
     LocalBundleAdjustment(keyframe, pyramid_, options_.bf, options_.local_ba_iterations,
                           options_.local_ba_max_covisibles);
+    return;
   }
-  CullRedundantKeyFrames(keyframe);
+  // One solve at a time, each from the map as the last one left it: while one is running,
+  // the latest keyframe waits its turn (its window covers those before it, which are then
+  // not adjusted on their own, as when ORB-SLAM's mapping falls behind).
+  if (pending_adjustment_ == nullptr) {
+    StartBundleAdjustment(keyframe);
+  } else {
+    adjustment_due_ = keyframe;
+  }
 }
 
 int LocalMapper::CreateTriangulatedPoints(KeyFrame* keyframe, Map& map) {
@@ -385,7 +410,9 @@ void LocalMapper::CullRecentPoints(const KeyFrame* keyframe) {
 void LocalMapper::CullRedundantKeyFrames(KeyFrame* keyframe) {
   constexpr int kObservers = 3;
   for (KeyFrame* candidate : keyframe->BestCovisibles(1000)) {
-    if (candidate->id() == 0 || candidate == keyframe) continue;
+    // Keyframes made after this one are still waiting for their own stages (SlamOptions::
+    // mapping_slice_ms): their points have not been fused or culled yet.
+    if (candidate->id() == 0 || candidate->id() >= keyframe->id()) continue;
     int close_points = 0;
     int redundant = 0;
     for (int i = 0; i < candidate->features().size(); ++i) {

@@ -13,12 +13,20 @@
 
 namespace noctua::slam {
 
+// The stages of mapping a keyframe after its observations and connections, in the order they run.
+enum class MappingStage { kCullRecentPoints, kTriangulate, kFuse, kBundleAdjust, kCullKeyFrames };
+inline constexpr MappingStage kMappingStages[] = {
+    MappingStage::kCullRecentPoints, MappingStage::kTriangulate, MappingStage::kFuse,
+    MappingStage::kBundleAdjust, MappingStage::kCullKeyFrames};
+
 // Integrates each new keyframe into the map (ORB-SLAM's LocalMapping): observations and
 // covisibility, culling of new points that are rarely matched, triangulation of new points
 // between keyframes for keypoints without usable depth, local bundle adjustment, culling of
-// redundant keyframes. Everything but the bundle adjustment's solve runs on the tracking thread;
-// the solve runs in line (deterministic) or, with SlamOptions::background_bundle_adjustment, on a
-// thread of its own, so that tracking does not wait for it.
+// redundant keyframes. Everything but the bundle adjustment's solve runs on the tracking thread,
+// all at once (ProcessKeyFrame) or stage by stage over the frames that follow (BeginKeyFrame, then
+// RunStage for each of kMappingStages, SlamOptions::mapping_slice_ms); the solve runs in line
+// (deterministic) or, with SlamOptions::background_bundle_adjustment, on a thread of its own, so
+// that tracking does not wait for it.
 class LocalMapper {
  public:
   LocalMapper(const SlamOptions& options, const ScalePyramid& pyramid)
@@ -27,8 +35,13 @@ class LocalMapper {
   LocalMapper(const LocalMapper&) = delete;
   LocalMapper& operator=(const LocalMapper&) = delete;
 
-  // `map` receives the points triangulated with the keyframe.
+  // `map` receives the points triangulated with the keyframe. BeginKeyFrame and every stage.
   void ProcessKeyFrame(KeyFrame* keyframe, Map& map);
+  // The keyframe's points get its observations and it joins the covisibility graph: before any
+  // stage, when the keyframe is made.
+  void BeginKeyFrame(KeyFrame* keyframe);
+  // One stage of mapping `keyframe`, after the stages before it in kMappingStages.
+  void RunStage(MappingStage stage, KeyFrame* keyframe, Map& map);
   // Applies the background bundle adjustment's result if it is ready and starts the one of the
   // keyframe waiting for its turn, if any; with `wait`, until none is left. Returns whether none
   // is left. Call on the tracking thread (at the start of each frame).
@@ -57,6 +70,9 @@ class LocalMapper {
             bool points_win = false);
 
  private:
+  // The local bundle adjustment around the keyframe: in line, or on its own thread
+  // (SlamOptions::background_bundle_adjustment).
+  void BundleAdjust(KeyFrame* keyframe);
   void StartBundleAdjustment(KeyFrame* keyframe);
   void CullRecentPoints(const KeyFrame* keyframe);
   // The world position of keypoint i of `first` and j of `second` when it passes the parallax,

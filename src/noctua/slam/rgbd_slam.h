@@ -43,7 +43,16 @@ class RgbdSlam {
     double moving_ms = 0.0;
   };
   Extracted Extract(const cv::Mat& image, const cv::Mat& depth_m, double timestamp);
-  TrackResult Track(Extracted extracted);
+  // Tracks the frame and, with `advance_mapping`, then runs a slice of the mapping still waiting
+  // (AdvanceMapping; its time is in the result's "mapping" stage).
+  TrackResult Track(Extracted extracted, bool advance_mapping = true);
+  // A slice of the mapping still waiting (SlamOptions::mapping_slice_ms; nothing when it is 0),
+  // for a caller that runs it apart from Track, e.g. after handing the frame's pose on and
+  // before the next frame's extraction is ready. Returns the ms spent.
+  // With `stages`, that many stages at most, whatever their time.
+  double AdvanceMapping(std::optional<int> stages = std::nullopt) {
+    return tracker_.AdvanceMapping(stages);
+  }
 
   // T_world_camera of every tracked frame (lost frames and frames before the map exist are
   // left out rather than guessed), with the latest keyframe poses (after the bundle adjustment

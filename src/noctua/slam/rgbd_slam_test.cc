@@ -109,6 +109,64 @@ TEST_F(RgbdSlamTest, TracksEveryFrameWithTheBundleAdjustmentInTheBackground) {
   EXPECT_LT(ate.translation_m.rmse, 0.03);
 }
 
+// Mapping stage by stage over the frames after each keyframe (what `noctua slam` does): with a
+// slice shorter than any stage and frames extracted in line (no waiting for an extraction, when
+// more stages would run), exactly one stage runs per frame, so the schedule is the same every
+// run. A keyframe then waits in the queue for the frames after it, never more than
+// max_queued_keyframes at once, and none once the run has returned; every frame is still tracked
+// within the in-line bound, and two runs agree.
+TEST_F(RgbdSlamTest, MapsKeyFramesStageByStageOverTheFramesAfterThem) {
+  SlamOptions options = setup_->options;
+  options.mapping_slice_ms = 1e-9;
+  const auto run = [&](std::vector<int>* queued) {
+    RgbdSlam slam(setup_->camera.Camera(), Orb(*setup_), options);
+    RunOptions run_options;
+    run_options.max_frames = 100;
+    run_options.overlap_extraction = false;
+    run_options.progress = [&](int, int, const FrameOutcome&) {
+      if (queued != nullptr) queued->push_back(slam.tracker().queued_keyframes());
+    };
+    SequenceRun result = RunSequence(slam, *sequence_, setup_->camera.depth_factor, run_options);
+    EXPECT_EQ(slam.tracker().queued_keyframes(), 0);
+    return result;
+  };
+  std::vector<int> queued;
+  const SequenceRun sliced = run(&queued);
+  EXPECT_TRUE(sliced.lost_frames.empty());
+  EXPECT_EQ(sliced.trajectory.size(), 100u);
+  EXPECT_GE(sliced.keyframes, 3);
+  // After a keyframe's frame its mapping is still to come (progress runs before the slice).
+  for (std::size_t i = 0; i < sliced.frames.size(); ++i) {
+    if (sliced.frames[i].new_keyframe && i > 0) {
+      EXPECT_GE(queued[i], 1) << "frame " << i;
+    }
+  }
+  EXPECT_GT(*std::max_element(queued.begin(), queued.end()), 0);
+  EXPECT_LE(*std::max_element(queued.begin(), queued.end()), options.max_queued_keyframes);
+  const eval::AteResult ate = eval::ComputeAte(sequence_->ground_truth(), sliced.trajectory);
+  EXPECT_LT(ate.translation_m.rmse, 0.03);
+  const SequenceRun again = run(nullptr);
+  ASSERT_EQ(again.trajectory.size(), sliced.trajectory.size());
+  for (std::size_t i = 0; i < sliced.trajectory.size(); ++i) {
+    EXPECT_TRUE(
+        again.trajectory.poses()[i].pose.isApprox(sliced.trajectory.poses()[i].pose, 1e-12));
+  }
+  // In line (the default) nothing ever waits.
+  RgbdSlam in_line(setup_->camera.Camera(), Orb(*setup_), setup_->options);
+  RunOptions run_options;
+  run_options.max_frames = 30;
+  run_options.progress = [&](int, int, const FrameOutcome&) {
+    EXPECT_EQ(in_line.tracker().queued_keyframes(), 0);
+  };
+  RunSequence(in_line, *sequence_, setup_->camera.depth_factor, run_options);
+  SlamOptions negative = setup_->options;
+  negative.mapping_slice_ms = -1.0;
+  EXPECT_THROW(RgbdSlam(setup_->camera.Camera(), Orb(*setup_), negative), Error);
+  SlamOptions no_queue = setup_->options;
+  no_queue.max_queued_keyframes = 0;
+  EXPECT_THROW(RgbdSlam(setup_->camera.Camera(), Orb(*setup_), no_queue), Error);
+}
+
 // Points made by triangulation in a run: made, still in the map, and of those the ones whose
 // keypoint in their reference keyframe (as detected) lies left of `left_of_px`.
 struct TriangulatedCount {

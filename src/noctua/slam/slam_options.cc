@@ -60,6 +60,8 @@ void SlamOptions::Check() const {
   CheckOption(relocalisation_candidates >= 1, "slam: relocalisation_candidates must be >= 1");
   CheckOption(local_ba_iterations >= 1, "slam: local_ba_iterations must be >= 1");
   CheckOption(local_ba_max_covisibles >= 0, "slam: local_ba_max_covisibles must be >= 0");
+  CheckOption(mapping_slice_ms >= 0.0, "slam: mapping_slice_ms must not be negative");
+  CheckOption(max_queued_keyframes >= 1, "slam: max_queued_keyframes must be >= 1");
   CheckOption(keyframe_redundancy > 0.0 && keyframe_redundancy <= 1.0,
               "slam: keyframe_redundancy must be in (0, 1]");
   triangulation.Check();

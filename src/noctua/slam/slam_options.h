@@ -78,6 +78,10 @@ struct LoopClosingOptions {
   void Check() const;
 };
 
+// SlamOptions::mapping_slice_ms where runs need not be deterministic: about one mapping stage per
+// frame (the longest take 5-16 ms alone on two cores).
+inline constexpr double kBackgroundMappingSliceMs = 5.0;
+
 // Settings of the RGB-D SLAM. Defaults are ORB-SLAM2's for RGB-D (TUM settings files), so that
 // results compare with it; the pyramid must be the one of the feature extractor in use.
 struct SlamOptions {
@@ -148,6 +152,16 @@ struct SlamOptions {
   // library callers (tests compare runs); `noctua slam` and noctua.run_slam turn it on unless
   // asked to be deterministic (eval::SlamRunOptions::deterministic).
   bool background_bundle_adjustment = false;
+  // Mapping of a keyframe stage by stage (LocalMapper's kMappingStages, then place recognition
+  // and loop closing) over the frames after it, as ORB-SLAM's mapping thread lags tracking: after
+  // each frame is tracked, stages run until this many ms are spent (at least one), so that no
+  // frame waits for a keyframe's whole mapping (25-57 ms on the tracking thread with paper and
+  // YOLOv8n on two cores, docs/slam.md). A keyframe made while max_queued_keyframes are still
+  // waiting has the oldest finished first. 0: all of it in line when the keyframe is made, so
+  // that a run is deterministic (the default for library callers; `noctua slam` and
+  // noctua.run_slam use kBackgroundMappingSliceMs unless asked to be deterministic).
+  double mapping_slice_ms = 0.0;
+  int max_queued_keyframes = 2;
   // Covisible keyframes refined with a new keyframe, the most covisible first (0: all, as
   // ORB-SLAM). All grows with the map where a place is seen again: on tum_fr1_rpy_200 played
   // forward and back, mapping at frames 900-1000 cost 864 ms per frame with all and 97 ms with

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/eigen.hpp>
 #include <set>
@@ -665,8 +666,8 @@ bool Tracker::NeedNewKeyFrame() const {
   }
   const bool need_close = tracked_close < 100 && untracked_close > 70;
   const double ratio = keyframes < 2 ? 0.4 : 0.75;
-  // Mapping runs in line here (only its bundle adjustment may still be solving, and a new
-  // keyframe then waits its turn for one), so it is always idle: ORB-SLAM's condition c1b always
+  // Mapping never refuses a keyframe here (it runs in line, or queues it behind at most
+  // max_queued_keyframes others, finishing the oldest first): ORB-SLAM's condition c1b always
   // holds and a keyframe is made whenever the tracked points thin out (c2).
   return (inliers_ < reference_matches * ratio || need_close) && inliers_ > 15;
 }
@@ -706,15 +707,57 @@ void Tracker::CreateNewKeyFrame() {
       keyframe->SetMapPoint(i, point);
     }
   }
-  mapper_.ProcessKeyFrame(keyframe, map_);
-  EraseCulledFromDatabase();
-  AddToDatabase(keyframe);
-  loop_closer_.ProcessKeyFrame(keyframe, map_, mapper_, database_, database_keyframes_);
+  MapKeyFrame(keyframe);
   reference_ = last_keyframe_ = keyframe;
   last_keyframe_frame_id_ = frame.id;
   // Local bundle adjustment (or a loop closed) moved the keyframe: the frame keeps its pose
   // relative to it.
   frame.pose_cw = keyframe->pose_cw();
+}
+
+void Tracker::MapKeyFrame(KeyFrame* keyframe) {
+  mapper_.BeginKeyFrame(keyframe);
+  mapping_queue_.push_back({keyframe, 0});
+  const std::size_t max_queued =
+      options_.mapping_slice_ms > 0.0 ? static_cast<std::size_t>(options_.max_queued_keyframes) : 0;
+  while (mapping_queue_.size() > max_queued) RunMappingStage();
+}
+
+void Tracker::RunMappingStage() {
+  QueuedKeyFrame& queued = mapping_queue_.front();
+  constexpr std::size_t kStages = std::size(kMappingStages);
+  // A keyframe culled while it waited (by an older one's stage) needs no more mapping.
+  if (queued.keyframe->bad()) {
+    mapping_queue_.pop_front();
+    return;
+  }
+  if (queued.next_stage < kStages) {
+    mapper_.RunStage(kMappingStages[queued.next_stage++], queued.keyframe, map_);
+    return;
+  }
+  KeyFrame* keyframe = queued.keyframe;
+  mapping_queue_.pop_front();
+  RecognisePlace(keyframe);
+}
+
+void Tracker::RecognisePlace(KeyFrame* keyframe) {
+  EraseCulledFromDatabase();
+  AddToDatabase(keyframe);
+  loop_closer_.ProcessKeyFrame(keyframe, map_, mapper_, database_, database_keyframes_);
+}
+
+double Tracker::AdvanceMapping(std::optional<int> stages) {
+  const Stopwatch watch;
+  for (int run = 1; !mapping_queue_.empty(); ++run) {
+    RunMappingStage();
+    if (stages ? run >= *stages : watch.ElapsedMs() >= options_.mapping_slice_ms) break;
+  }
+  return watch.ElapsedMs();
+}
+
+void Tracker::FinishMapping() {
+  while (!mapping_queue_.empty()) RunMappingStage();
+  mapper_.CollectBundleAdjustment(/*wait=*/true);
 }
 
 }  // namespace noctua::slam

@@ -68,9 +68,17 @@ class Tracker {
   explicit Tracker(const SlamOptions& options);
 
   TrackResult Track(Frame frame);
-  // Applies the background bundle adjustment still solving, if any (waits for it), so that the
-  // map is final: before reading the trajectory or saving the map at the end of a run.
-  void FinishMapping() { mapper_.CollectBundleAdjustment(/*wait=*/true); }
+  // Runs the stages of mapping still waiting (SlamOptions::mapping_slice_ms) for about that long,
+  // at least one; none are waiting when the slice is 0. Call between frames, e.g. while the next
+  // frame is extracted. With `stages`, that many at most, whatever their time. Returns the ms
+  // spent.
+  double AdvanceMapping(std::optional<int> stages = std::nullopt);
+  // Keyframes whose mapping is not finished (SlamOptions::mapping_slice_ms).
+  int queued_keyframes() const { return static_cast<int>(mapping_queue_.size()); }
+  // Runs every stage of mapping still waiting and applies the background bundle adjustment still
+  // solving, if any (waits for it), so that the map is final: before reading the trajectory or
+  // saving the map at the end of a run.
+  void FinishMapping();
 
   // Starts from a saved map (map_io.h) instead of a new one, before the first frame: that frame
   // is relocalised in the map. With `localize` the map stays exactly as loaded: no keyframes or
@@ -115,6 +123,13 @@ class Tracker {
   std::optional<CentrePrior> MotionPrior() const;
   bool Coast(TrackResult& result);
   void CreateNewKeyFrame();
+  // Maps a new keyframe: all at once, or queued for AdvanceMapping (SlamOptions::
+  // mapping_slice_ms), the oldest finished first when too many wait.
+  void MapKeyFrame(KeyFrame* keyframe);
+  // The next stage of the oldest queued keyframe: LocalMapper's kMappingStages, then place
+  // recognition (keyframe database and loop closing).
+  void RunMappingStage();
+  void RecognisePlace(KeyFrame* keyframe);
   int DiscardOutliers();
   // Drops the current frame's matches that move against the static world (FindStaticPairs) and
   // flags their keypoints moving. With `vote` (once per frame, on the final matches) each such
@@ -132,6 +147,13 @@ class Tracker {
   Map map_;
   LocalMapper mapper_;
   LoopCloser loop_closer_;  // after mapping of each keyframe (SlamOptions::loop_closing)
+  // Keyframes made whose mapping is not finished, oldest first, with the stage each runs next (an
+  // index into kMappingStages; its size: place recognition).
+  struct QueuedKeyFrame {
+    KeyFrame* keyframe = nullptr;
+    std::size_t next_stage = 0;
+  };
+  std::deque<QueuedKeyFrame> mapping_queue_;
   Matcher matcher_;         // ratio 0.9 (ORB-SLAM's tracking)
   Matcher strict_matcher_;  // ratio 0.7 (reference keyframe, relocalisation)
 
