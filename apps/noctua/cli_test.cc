@@ -416,10 +416,10 @@ TEST_F(CliTest, BenchWritesATableJsonAndPlotWithEveryStageAndMethod) {
 // after every frame, so that growth can be set against the map.
 TEST_F(CliTest, SlamReportsMemoryAndMapSize) {
   const auto out = dir_ / "slam";
-  const CommandResult result =
-      RunNoctua("slam --dataset " + (noctua::testing::DataDir() / "tum_fr1_rpy_200").string() +
-                " --config " + std::string(NOCTUA_SOURCE_DIR) +
-                "/config/tum_fr1.yaml --method orb --max-frames 12 --out " + out.string());
+  const CommandResult result = RunNoctua(
+      "slam --dataset " + (noctua::testing::DataDir() / "tum_fr1_rpy_200").string() + " --config " +
+      std::string(NOCTUA_SOURCE_DIR) +
+      "/config/tum_fr1.yaml --method orb --max-frames 12 --deterministic --out " + out.string());
   ASSERT_EQ(result.exit_code, 0) << result.output;
   std::ifstream in(out / "report.json");
   const auto report = nlohmann::json::parse(in);
@@ -441,7 +441,8 @@ TEST_F(CliTest, SlamReportsMemoryAndMapSize) {
     last = line;
   }
   EXPECT_EQ(rows, 12);
-  // The last row's map size is the report's: columns 10 and 11 (keyframes, map_points); a tracked
+  // The last row's map size is the report's (deterministic: no mapping stage was left to run after
+  // the last frame): columns 10 and 11 (keyframes, map_points); a tracked
   // frame's moving keypoints in column 6 (none: rejection is off by default) and its confidence
   // in columns 7 and 8 (position sigma in mm, rotation sigma in degrees).
   std::vector<std::string> cells;

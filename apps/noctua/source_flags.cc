@@ -35,6 +35,12 @@ void AddSourceFlags(CLI::App& command, SourceFlags& flags, SourceKinds kinds) {
                   "Play the folder or bag at this multiple of its recording's rate, dropping "
                   "frames that arrive while the SLAM is busy, as a camera does (0: every frame)")
       ->excludes(live);
+  command
+      .add_flag("--replay-preload", source.replay_preload,
+                "With --replay-rate: decode the whole recording into memory first (about 2 MB "
+                "per 640x480 frame), so that, as with a camera, no decoding competes with the "
+                "SLAM while it plays")
+      ->excludes(live);
 }
 
 io::FrameSourceOptions SourceFlags::Options(const CLI::App& command) const {

@@ -106,8 +106,9 @@ def run_slam(sequence_dir=None, config=None, method="paper", detector=None, max_
     --vocabulary``): ``"default"``, ``"none"`` or a file; None keeps the settings file's
     (``report["map"]["vocabulary"]`` names the one used). ``brightness``, ``sensor`` and ``seed``
     darken every frame by a camera model of ``sensor_models()``, as ``slam --brightness --sensor
-    --seed`` do. ``deterministic`` runs the local bundle adjustment in line (``slam
-    --deterministic``): the same result every run, slower keyframes.
+    --seed`` do. ``deterministic`` runs the local bundle adjustment in line and maps each
+    keyframe in the frame that makes it (``slam --deterministic``): the same result every run,
+    slower keyframes.
     """
     if config is None:
         raise Error("run_slam needs config (a camera preset, e.g. config_path('tum_fr1.yaml'))")

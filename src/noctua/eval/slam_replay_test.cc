@@ -50,33 +50,18 @@ void ExpectConsistent(const SlamRunReport& report) {
   EXPECT_EQ(static_cast<std::size_t>(std::count(csv.begin(), csv.end(), '\n')), kFrames + 1U);
 }
 
-// Frames read into memory first, so that a replay offers them as fast as its rate says rather
-// than as fast as PNGs decode.
-class MemorySource : public io::FrameSource {
- public:
-  explicit MemorySource(io::FrameSource& from) {
-    while (std::optional<io::SourceFrame> frame = from.Next()) frames_.push_back(std::move(*frame));
-  }
-  std::string Describe() const override { return "memory"; }
-  std::optional<std::size_t> size() const override { return frames_.size(); }
-  std::optional<io::SourceFrame> Next() override {
-    if (next_ >= frames_.size()) return std::nullopt;
-    return frames_[next_++];
-  }
-
- private:
-  std::vector<io::SourceFrame> frames_;
-  std::size_t next_ = 0;
-};
-
 // 50 times the recording's rate offers the 24 frames within 16 ms, far faster than the SLAM
 // takes them: most are dropped (even the first, when the SLAM's threads are not yet taking),
 // yet the last is always tracked (nothing replaces it).
 TEST(SlamReplayTest, FarTooFastDropsFramesAndCountsEveryOne) {
   const slam::SlamSetup setup = slam::LoadSlamSetup("config/tum_fr1.yaml");
-  io::FolderSource folder(io::Sequence::Open(testing::DataDir() / "tum_fr1_rpy_200"),
-                          setup.camera.depth_factor, kFrames);
-  io::RealTimeSource replay(std::make_unique<MemorySource>(folder), 50.0);
+  // Preloaded, so that the replay offers frames as fast as its rate says rather than as fast as
+  // PNGs decode.
+  io::RealTimeSource replay(
+      std::make_unique<io::PreloadedSource>(std::make_unique<io::FolderSource>(
+          io::Sequence::Open(testing::DataDir() / "tum_fr1_rpy_200"), setup.camera.depth_factor,
+          kFrames)),
+      50.0);
   const auto method = pipeline::CreateMethod("orb", pipeline::MethodConfig());
   SlamRunReport report;
   report.run = slam::RunFrames(replay, setup.camera.Camera(), method->feature2d(), setup.options);
@@ -113,6 +98,21 @@ TEST(SlamReplayTest, SlowEnoughDropsNoneAndTracksLikeTheUntimedRun) {
   const SlamRunReport untimed = RunSlam(ReplayOptions(0.0));
   ASSERT_EQ(replayed.run.trajectory.size(), untimed.run.trajectory.size());
   EXPECT_EQ(replayed.run.lost_frames, untimed.run.lost_frames);
+  // A replayed frame's latency, from its arrival to its pose, covers its loading, extraction and
+  // tracking; a recording read as fast as it goes has none, in the frames and in the report.
+  for (const slam::FrameOutcome& frame : replayed.run.frames) {
+    ASSERT_EQ(frame.stage_ms.count("latency"), 1u) << "frame " << frame.index;
+    EXPECT_GE(frame.stage_ms.at("latency"),
+              frame.stage_ms.at("extract") + frame.stage_ms.at("track"))
+        << "frame " << frame.index;
+  }
+  EXPECT_GT(replayed.json["timing_ms"]["latency"]["max"].get<double>(), 0.0);
+  for (const slam::FrameOutcome& frame : untimed.run.frames) {
+    EXPECT_EQ(frame.stage_ms.count("latency"), 0u);
+  }
+  EXPECT_FALSE(untimed.json["timing_ms"].contains("latency"));
+  const std::string csv = FramesCsv(untimed.run, SlamReportStages(), untimed.rss_mb);
+  EXPECT_NE(csv.find(",total_ms,latency_ms\n"), std::string::npos);
 }
 
 TEST(SlamReplayTest, ABagPlaysInRealTimeToo) {

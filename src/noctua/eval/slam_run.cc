@@ -163,7 +163,7 @@ void SlamRunOptions::Check() const {
 
 const std::vector<std::string>& SlamReportStages() {
   static const std::vector<std::string> stages = {"load",      "extract", "moving", "track",
-                                                  "local_map", "mapping", "total"};
+                                                  "local_map", "mapping", "total",  "latency"};
   return stages;
 }
 
@@ -336,9 +336,14 @@ std::string FrameRow(std::size_t i, const slam::FrameOutcome& f,
                 f.moving_keypoints, sigma, f.new_keyframe ? 1 : 0, f.keyframes, f.map_points,
                 rss_mb);
   std::string row = buffer;
+  // A stage the frame did not have (no latency without a real-time source) stays empty.
   for (const auto& stage : stages) {
     const auto found = f.stage_ms.find(stage);
-    std::snprintf(buffer, sizeof(buffer), ",%.3f", found == f.stage_ms.end() ? 0.0 : found->second);
+    if (found == f.stage_ms.end()) {
+      row += ",";
+      continue;
+    }
+    std::snprintf(buffer, sizeof(buffer), ",%.3f", found->second);
     row += buffer;
   }
   return row + "\n";
@@ -387,6 +392,7 @@ std::vector<StageTiming> SummarizeStages(const std::vector<slam::FrameOutcome>& 
       const auto found = frame.stage_ms.find(stage);
       if (found != frame.stage_ms.end()) samples.push_back(found->second);
     }
+    if (samples.empty()) continue;  // a stage of no frame in this run
     double sum = 0.0;
     for (double sample : samples) sum += sample;
     const double mean = samples.empty() ? 0.0 : sum / static_cast<double>(samples.size());

@@ -85,7 +85,8 @@ struct SlamRunReport {
   std::string markdown;            // report.md
 };
 
-// The stages of FrameOutcome::stage_ms that reports list, in pipeline order.
+// The stages of FrameOutcome::stage_ms that reports list, in pipeline order (latency, from a
+// real-time source only, last). A stage no frame of a run has is left out of its summary.
 const std::vector<std::string>& SlamReportStages();
 
 // A SLAM run in two steps, so that a caller can refuse bad input before it creates anything

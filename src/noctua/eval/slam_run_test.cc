@@ -27,6 +27,8 @@ slam::FrameOutcome Outcome(slam::TrackingState state, double track_ms, double ma
   return f;
 }
 
+// A frame without a pose has empty sigma cells, and a stage the frame did not have (here the lost
+// frame's mapping) an empty cell rather than a time of 0.
 TEST(FramesCsvTest, OneRowPerFrameWithEmptySigmaWithoutPose) {
   slam::SequenceRun run;
   run.frames = {Outcome(slam::TrackingState::kOk, 2.0, 10.0),
@@ -37,7 +39,7 @@ TEST(FramesCsvTest, OneRowPerFrameWithEmptySigmaWithoutPose) {
             "frame,timestamp,state,method,keypoints,inliers,moving_keypoints,position_sigma_mm,"
             "rotation_sigma_deg,keyframe,keyframes,map_points,rss_mb,track_ms,mapping_ms\n"
             "0,1.500000,ok,motion,1000,250,0,4.20,0.125,1,3,700,120.0,2.000,10.000\n"
-            "1,1.500000,lost,,1000,250,0,,,0,3,700,0.0,3.000,0.000\n");
+            "1,1.500000,lost,,1000,250,0,,,0,3,700,0.0,3.000,\n");
 }
 
 // A real-time run: the frames the source dropped get rows of their own, in frame order, so that

@@ -27,7 +27,18 @@ std::string FolderSource::Describe() const { return "folder " + sequence_.dir().
 std::optional<SourceFrame> FolderSource::Next() {
   if (next_ >= count_) return std::nullopt;
   const Frame& frame = sequence_.frame(next_++);
-  return SourceFrame{frame.index, frame.timestamp, sequence_.Load(frame, depth_factor_)};
+  return SourceFrame{frame.index, frame.timestamp, sequence_.Load(frame, depth_factor_), {}};
+}
+
+PreloadedSource::PreloadedSource(std::unique_ptr<FrameSource> from)
+    : from_(std::move(from)), description_(from_->Describe() + ", preloaded") {
+  while (std::optional<SourceFrame> frame = from_->Next()) frames_.push_back(std::move(*frame));
+}
+
+std::optional<SourceFrame> PreloadedSource::Next() {
+  if (next_ >= frames_.size()) return std::nullopt;
+  // Handed over, not copied: each frame is read once.
+  return std::move(frames_[next_++]);
 }
 
 void FrameSourceOptions::Check() const {
@@ -36,6 +47,7 @@ void FrameSourceOptions::Check() const {
   CheckOption(max_frames >= 0, "max_frames must not be negative");
   CheckOption(replay_rate >= 0.0, "replay_rate must not be negative");
   CheckOption(!(live && replay_rate > 0.0), "replay_rate plays a recording, not a camera");
+  CheckOption(!replay_preload || replay_rate > 0.0, "replay_preload needs a replay_rate");
   CheckOption(!live || ground_truth.empty(), "a camera has no ground truth file");
   CheckOption(dataset.empty() || ground_truth.empty(),
               "a dataset folder brings its own ground truth (groundtruth.txt)");
@@ -73,6 +85,9 @@ std::unique_ptr<FrameSource> OpenFrameSource(const FrameSourceOptions& options) 
   }
   std::unique_ptr<FrameSource> recording = OpenRecording(options);
   if (options.replay_rate > 0.0) {
+    if (options.replay_preload) {
+      recording = std::make_unique<PreloadedSource>(std::move(recording));
+    }
     return std::make_unique<RealTimeSource>(std::move(recording), options.replay_rate);
   }
   return recording;

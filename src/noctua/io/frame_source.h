@@ -1,5 +1,6 @@
 #pragma once
 
+#include <chrono>
 #include <cstddef>
 #include <filesystem>
 #include <memory>
@@ -18,6 +19,9 @@ struct SourceFrame {
   int index = 0;           // position in the source (recording order, dropped frames counted)
   double timestamp = 0.0;  // time of the colour image, seconds
   FrameImages images;      // 8-bit BGR and depth in metres (CV_32F, 0 = none)
+  // When a real-time source (a camera, a replay) offered the frame to its reader, so that the
+  // time from then to the frame's pose can be told; none for a recording read as fast as it goes.
+  std::optional<std::chrono::steady_clock::time_point> arrival;
 };
 
 // A frame a real-time source skipped because its reader had not taken the previous one yet.
@@ -64,6 +68,25 @@ class FolderSource : public FrameSource {
   std::size_t next_ = 0;
 };
 
+// Every frame of another source, read (decoded) into memory when made, then handed out in order:
+// a replay of it then spends no time decoding while it plays, as a camera spends none (about
+// 2 MB per 640x480 frame).
+class PreloadedSource : public FrameSource {
+ public:
+  explicit PreloadedSource(std::unique_ptr<FrameSource> from);
+
+  std::string Describe() const override { return description_; }
+  std::optional<std::size_t> size() const override { return frames_.size(); }
+  std::optional<SourceFrame> Next() override;
+  const Trajectory& ground_truth() const override { return from_->ground_truth(); }
+
+ private:
+  std::unique_ptr<FrameSource> from_;
+  std::string description_;
+  std::vector<SourceFrame> frames_;
+  std::size_t next_ = 0;
+};
+
 // Where `noctua slam` reads: exactly one of a folder, a bag or a camera.
 struct FrameSourceOptions {
   std::filesystem::path dataset;    // TUM RGB-D or OpenLORIS folder
@@ -78,6 +101,9 @@ struct FrameSourceOptions {
   // > 0: frames arrive at this multiple of the recording's rate, and those that arrive while
   // the previous one waits are dropped (RealTimeSource). A camera is always real time.
   double replay_rate = 0.0;
+  // With replay_rate: decode the whole recording into memory before playing it (PreloadedSource),
+  // so that, as with a camera, no decoding competes with the SLAM for the cores.
+  bool replay_preload = false;
 
   // Throws noctua::Error naming the first invalid field.
   void Check() const;

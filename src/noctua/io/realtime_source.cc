@@ -8,6 +8,7 @@
 namespace noctua::io {
 
 void LatestFrameSlot::Put(SourceFrame frame) {
+  if (!frame.arrival) frame.arrival = std::chrono::steady_clock::now();
   {
     std::lock_guard lock(mutex_);
     if (waiting_) dropped_.push_back({waiting_->index, waiting_->timestamp});

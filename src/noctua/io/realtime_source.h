@@ -16,7 +16,7 @@ namespace noctua::io {
 // a frame not yet taken when the next one arrives is dropped and recorded.
 class LatestFrameSlot {
  public:
-  // Replaces (drops) a frame still waiting.
+  // Replaces (drops) a frame still waiting. A frame without an arrival time gets the present.
   void Put(SourceFrame frame);
   // No frame will follow; Take() rethrows `error` once the slot is empty, when there is one.
   void Close(std::exception_ptr error = nullptr);

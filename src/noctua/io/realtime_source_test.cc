@@ -83,6 +83,54 @@ TEST(RealTimeSourceTest, EveryFrameIsEitherTakenOrDropped) {
   for (int i = 0; i < 9; ++i) EXPECT_EQ(dropped[i].index, i);
 }
 
+// A frame gets its arrival time when it is offered, not before: what the SLAM's latency counts
+// from.
+TEST(LatestFrameSlotTest, StampsTheArrivalOfEachFrame) {
+  LatestFrameSlot slot;
+  GeneratedSource frames(1);
+  std::optional<SourceFrame> frame = frames.Next();
+  EXPECT_FALSE(frame->arrival.has_value());
+  const auto before = std::chrono::steady_clock::now();
+  slot.Put(std::move(*frame));
+  const std::optional<SourceFrame> taken = slot.Take();
+  ASSERT_TRUE(taken->arrival.has_value());
+  EXPECT_GE(*taken->arrival, before);
+  EXPECT_LE(*taken->arrival, std::chrono::steady_clock::now());
+}
+
+// Preloaded: every frame read at once, handed out in order and unchanged, then none; the source it
+// read is left at its end.
+TEST(PreloadedSourceTest, ReadsEveryFrameFirstThenHandsThemOutInOrder) {
+  auto from = std::make_unique<GeneratedSource>(5);
+  GeneratedSource* read = from.get();
+  PreloadedSource preloaded(std::move(from));
+  EXPECT_FALSE(read->Next().has_value());
+  EXPECT_EQ(preloaded.size(), 5U);
+  EXPECT_EQ(preloaded.Describe(), "generated, preloaded");
+  for (int i = 0; i < 5; ++i) {
+    const std::optional<SourceFrame> frame = preloaded.Next();
+    ASSERT_TRUE(frame.has_value());
+    EXPECT_EQ(frame->index, i);
+    EXPECT_DOUBLE_EQ(frame->timestamp, 100.0 + i / 30.0);
+    EXPECT_EQ(frame->images.bgr.at<cv::Vec3b>(1, 1)[0], i);
+  }
+  EXPECT_FALSE(preloaded.Next().has_value());
+  RealTimeSource replay(std::make_unique<PreloadedSource>(std::make_unique<GeneratedSource>(4)),
+                        30.0);
+  int taken = 0;
+  while (replay.Next()) ++taken;
+  EXPECT_EQ(taken + static_cast<int>(replay.dropped().size()), 4);
+  FrameSourceOptions options;
+  options.dataset = "anywhere";
+  options.replay_preload = true;
+  try {
+    options.Check();
+    ADD_FAILURE() << "preloading without a replay rate was accepted";
+  } catch (const Error& error) {
+    EXPECT_THAT(error.what(), HasSubstr("replay_preload needs a replay_rate"));
+  }
+}
+
 TEST(RealTimeSourceTest, ARateThatIsNotPositiveIsRefused) {
   EXPECT_THROW(RealTimeSource(std::make_unique<GeneratedSource>(1), 0.0), Error);
 }

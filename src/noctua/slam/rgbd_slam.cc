@@ -1,6 +1,7 @@
 #include "noctua/slam/rgbd_slam.h"
 
 #include <algorithm>
+#include <chrono>
 #include <condition_variable>
 #include <deque>
 #include <exception>
@@ -92,13 +93,15 @@ struct LoadedFrame {
   io::FrameImages images;
   double timestamp = 0.0;
   double load_ms = 0.0;
-  int index = 0;  // in the source
+  int index = 0;                                                 // in the source
+  std::optional<std::chrono::steady_clock::time_point> arrival;  // real-time sources only
 };
 
 struct PreparedFrame {
   RgbdSlam::Extracted extracted;
   double load_ms = 0.0;
   int index = 0;
+  std::optional<std::chrono::steady_clock::time_point> arrival;
   cv::Mat bgr;  // kept for RunOptions::observe only
 };
 
@@ -244,7 +247,8 @@ SequenceRun RunFrames(RgbdSlam& slam, io::FrameSource& source, const RunOptions&
     std::optional<io::SourceFrame> frame = source.Next();
     if (!frame) return std::nullopt;
     ++loaded_count;
-    LoadedFrame loaded{std::move(frame->images), frame->timestamp, 0.0, frame->index};
+    LoadedFrame loaded{std::move(frame->images), frame->timestamp, 0.0, frame->index,
+                       frame->arrival};
     if (run_options.transform_image) {
       loaded.images.bgr = run_options.transform_image(loaded.index, loaded.images.bgr);
     }
@@ -256,6 +260,7 @@ SequenceRun RunFrames(RgbdSlam& slam, io::FrameSource& source, const RunOptions&
     PreparedFrame prepared;
     prepared.load_ms = loaded.load_ms;
     prepared.index = loaded.index;
+    prepared.arrival = loaded.arrival;
     prepared.extracted = slam.Extract(loaded.images.bgr, loaded.images.depth_m, loaded.timestamp);
     if (run_options.observe) prepared.bgr = loaded.images.bgr;
     return prepared;
@@ -319,6 +324,11 @@ SequenceRun RunFrames(RgbdSlam& slam, io::FrameSource& source, const RunOptions&
     const std::shared_ptr<const FrameFeatures> features = prepared->extracted.features;
     TrackResult result = slam.Track(std::move(prepared->extracted), /*advance_mapping=*/false);
     result.stage_ms["mapping"] += mapping_slice_ms + waiting_mapping_ms;
+    if (prepared->arrival) {
+      result.stage_ms["latency"] = std::chrono::duration<double, std::milli>(
+                                       std::chrono::steady_clock::now() - *prepared->arrival)
+                                       .count();
+    }
     run.frames.push_back(
         Outcome(result, *prepared, mapping_slice_ms + total.ElapsedMs(), slam.tracker().map()));
     const int index = prepared->index;

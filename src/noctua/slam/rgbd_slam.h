@@ -91,7 +91,9 @@ struct FrameOutcome {
   int keyframes = 0;   // map size after this frame
   int map_points = 0;  // (so memory can be set against it over a long run)
   // load, extract, track, local_map, mapping, and total: the wall time of the frame's iteration
-  // (with overlapped extraction, the time the SLAM waited for it plus its own work).
+  // (with overlapped extraction, the time the SLAM waited for it plus its own work). From a
+  // real-time source (io::SourceFrame::arrival) also latency: from the frame's arrival to its
+  // pose, loading, extraction and any wait in the queues included.
   std::map<std::string, double> stage_ms;
 };
 
