@@ -32,12 +32,14 @@ void Viewer::Observe(const slam::FrameView& view, const cv::Mat& dynamic_mask) {
   if (window_ != nullptr) window_->Show(panel);
 }
 
-void Viewer::Finish() {
+void Viewer::Finish(const slam::Map* final_map) {
   if (window_ != nullptr && !options_.screenshot.empty()) {
     window_->SaveScreenshot(options_.screenshot);
   }
   if (video_ != nullptr) video_->Close();
-  if (!options_.map_ply.empty()) WritePly(last_map_, options_.map_ply);
+  if (options_.map_ply.empty()) return;
+  if (final_map != nullptr) last_map_ = SnapshotMap(*final_map, colours_);
+  WritePly(last_map_, options_.map_ply);
 }
 
 }  // namespace noctua::viz

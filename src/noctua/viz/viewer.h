@@ -40,8 +40,10 @@ class Viewer {
   // The user closed the window or pressed q/Esc.
   bool stop_requested() const { return window_ != nullptr && window_->stop_requested(); }
   int video_frames() const { return video_ != nullptr ? video_->frames() : 0; }
-  // Writes the screenshot, closes the video and writes the map of the last frame as a PLY.
-  void Finish();
+  // Writes the screenshot, closes the video and writes the map as a PLY: `final_map` when given
+  // (the map once the mapping still queued after the last frame has run, RgbdSlam::
+  // FinishMapping), else the map as the last frame saw it.
+  void Finish(const slam::Map* final_map = nullptr);
   const MapCloud& last_map() const { return last_map_; }
 
  private:
