@@ -291,7 +291,7 @@ SlamRunReport SlamRunner::Run(const SlamProgress& progress, const std::function<
   report.sequence_frames =
       source_->size().value_or(report.run.frames.size() + report.run.dropped_frames.size());
   if (viewer_ != nullptr) {
-    viewer_->Finish(&slam.tracker().map());
+    viewer_->Finish(slam.tracker().map());
     report.stopped_in_viewer = viewer_->stop_requested();
     report.video_frames = viewer_->video_frames();
   }

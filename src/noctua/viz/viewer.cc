@@ -21,25 +21,20 @@ Viewer::Viewer(const ViewerOptions& options, cv::Size frame_size, io::Trajectory
 }
 
 void Viewer::Observe(const slam::FrameView& view, const cv::Mat& dynamic_mask) {
-  if (!options_.map_ply.empty() && view.map != nullptr) {
-    colours_.Update(view);
-    // The map of this frame, in case it is the last (the map goes with the run).
-    last_map_ = SnapshotMap(*view.map, colours_);
-  }
+  // Colours are sampled from the frames as they pass; the map itself is written at the end.
+  if (!options_.map_ply.empty()) colours_.Update(view);
   if (window_ == nullptr && video_ == nullptr) return;
   const cv::Mat panel = panel_.Draw(view, dynamic_mask);
   if (video_ != nullptr) video_->Write(panel);
   if (window_ != nullptr) window_->Show(panel);
 }
 
-void Viewer::Finish(const slam::Map* final_map) {
+void Viewer::Finish(const slam::Map& final_map) {
   if (window_ != nullptr && !options_.screenshot.empty()) {
     window_->SaveScreenshot(options_.screenshot);
   }
   if (video_ != nullptr) video_->Close();
-  if (options_.map_ply.empty()) return;
-  if (final_map != nullptr) last_map_ = SnapshotMap(*final_map, colours_);
-  WritePly(last_map_, options_.map_ply);
+  if (!options_.map_ply.empty()) WritePly(SnapshotMap(final_map, colours_), options_.map_ply);
 }
 
 }  // namespace noctua::viz

@@ -40,17 +40,14 @@ class Viewer {
   // The user closed the window or pressed q/Esc.
   bool stop_requested() const { return window_ != nullptr && window_->stop_requested(); }
   int video_frames() const { return video_ != nullptr ? video_->frames() : 0; }
-  // Writes the screenshot, closes the video and writes the map as a PLY: `final_map` when given
-  // (the map once the mapping still queued after the last frame has run, RgbdSlam::
-  // FinishMapping), else the map as the last frame saw it.
-  void Finish(const slam::Map* final_map = nullptr);
-  const MapCloud& last_map() const { return last_map_; }
+  // Writes the screenshot, closes the video and writes `final_map` as a PLY (the map once the
+  // mapping still queued after the last frame has run, RgbdSlam::FinishMapping).
+  void Finish(const slam::Map& final_map);
 
  private:
   ViewerOptions options_;
   Panel panel_;
   MapPointColours colours_;
-  MapCloud last_map_;
   std::unique_ptr<WindowSink> window_;
   std::unique_ptr<VideoSink> video_;
 };
