@@ -109,8 +109,18 @@ void MapPoint::UpdateNormalAndDepth(const ScalePyramid& pyramid) {
   normal_ = normal.normalized();
   const auto found = observations_.find(reference_);
   if (found == observations_.end()) return;
-  const double distance = (position_ - reference_->CameraCentre()).norm();
-  const int level = reference_->features().octave(found->second);
+  SetDistanceRange((position_ - reference_->CameraCentre()).norm(),
+                   reference_->features().octave(found->second), pyramid);
+}
+
+void MapPoint::SetSingleView(const Eigen::Vector3d& camera_centre, int level,
+                             const ScalePyramid& pyramid) {
+  const Eigen::Vector3d ray = position_ - camera_centre;
+  normal_ = ray.normalized();
+  SetDistanceRange(ray.norm(), level, pyramid);
+}
+
+void MapPoint::SetDistanceRange(double distance, int level, const ScalePyramid& pyramid) {
   max_distance_ = distance * pyramid.scale[static_cast<std::size_t>(level)];
   min_distance_ = max_distance_ / pyramid.scale.back();
 }

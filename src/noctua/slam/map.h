@@ -60,6 +60,8 @@ class MapPoint {
   void SetDescriptor(const uchar* descriptor);
   // Mean viewing direction and the distance range in which the point can be detected.
   void UpdateNormalAndDepth(const ScalePyramid& pyramid);
+  // The same for a temporary point lifted from one view: seen from `camera_centre` at `level`.
+  void SetSingleView(const Eigen::Vector3d& camera_centre, int level, const ScalePyramid& pyramid);
   double min_distance() const { return 0.8 * min_distance_; }
   double max_distance() const { return 1.2 * max_distance_; }
   int PredictScale(double distance, const ScalePyramid& pyramid) const;
@@ -79,6 +81,9 @@ class MapPoint {
   int moving_frames = 0;  // tracked frames in a row in which the point moved against the world
 
  private:
+  // Seen at `distance` on pyramid `level`: the distances at which it can be detected at all.
+  void SetDistanceRange(double distance, int level, const ScalePyramid& pyramid);
+
   long id_;
   Eigen::Vector3d position_;
   KeyFrame* reference_;

@@ -12,6 +12,15 @@
 #include "noctua/util/timer.h"
 
 namespace noctua::slam {
+namespace {
+
+// Ids of temporary points, which live for one frame: the last frame's depth points (visual
+// odometry), and, localising, the depth points of the local keyframes, which count as the map's.
+constexpr long kOdometryPointId = -1;
+constexpr long kKeyFramePointId = -2;
+
+}  // namespace
+
 const char* TrackingStateName(TrackingState state) {
   switch (state) {
     case TrackingState::kNotInitialised:
@@ -236,8 +245,9 @@ void Tracker::UpdateLastFrame() {
     MapPoint* point = last_->map_points[static_cast<std::size_t>(i)];
     const bool needs_point = point == nullptr || point->bad() || point->num_observations() < 1;
     if (needs_point) {
-      // Id -1 marks it temporary; it has no observation, so it never counts as a map point.
-      auto temporary = std::make_unique<MapPoint>(-1, last_->Unproject(i), last_keyframe_);
+      // It has no observation, so it never counts as a map point.
+      auto temporary =
+          std::make_unique<MapPoint>(kOdometryPointId, last_->Unproject(i), last_keyframe_);
       temporary->SetDescriptor(last_->features->descriptor(i));
       last_->map_points[static_cast<std::size_t>(i)] = temporary.get();
       temporary_points_.push_back(std::move(temporary));
@@ -531,6 +541,32 @@ void Tracker::UpdateLocalMap() {
       local_points_.push_back(point);
     }
   }
+  // Localising, the map cannot grow: points a fast stretch's keyframes made and later keyframes
+  // did not confirm were culled, yet the keyframes kept their depth readings. Lifted with the
+  // keyframes' refined poses they place the frame as the culled points did, without the drift of
+  // the last frame's depth points.
+  // The reference keyframe's alone: the one nearest the frame, and a frame's worth of points.
+  if (localize_ && best != nullptr) LiftKeyFrameDepth(best, frame.id);
+}
+
+void Tracker::LiftKeyFrameDepth(KeyFrame* keyframe, long frame_id) {
+  const FrameFeatures& features = keyframe->features();
+  const geometry::Pose pose_wc = keyframe->pose_cw().inverse();
+  for (int i = 0; i < features.size(); ++i) {
+    const MapPoint* point = keyframe->map_point(i);
+    const double depth = features.depth(i);
+    if ((point != nullptr && !point->bad()) || depth <= 0.0 || depth > options_.close_depth_m) {
+      continue;
+    }
+    auto lifted = std::make_unique<MapPoint>(
+        kKeyFramePointId, pose_wc * features.camera().Unproject(features.undistorted(i), depth),
+        keyframe);
+    lifted->SetDescriptor(features.descriptor(i));
+    lifted->SetSingleView(pose_wc.translation(), features.octave(i), pyramid_);
+    lifted->local_map_frame = frame_id;
+    local_points_.push_back(lifted.get());
+    temporary_points_.push_back(std::move(lifted));
+  }
 }
 
 void Tracker::SearchLocalPoints() {
@@ -569,7 +605,8 @@ bool Tracker::TrackLocalMap() {
     if (point == nullptr) continue;
     if (!frame.outlier[i]) {
       point->IncreaseFound();
-      ++(point->num_observations() > 0 ? inliers_ : odometry_inliers_);
+      const bool in_map = point->num_observations() > 0 || point->id() == kKeyFramePointId;
+      ++(in_map ? inliers_ : odometry_inliers_);
     } else {
       frame.map_points[i] = nullptr;
       frame.outlier[i] = false;

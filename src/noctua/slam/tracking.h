@@ -114,6 +114,8 @@ class Tracker {
   bool TrackLocalMap();
   void UpdateLastFrame();
   void UpdateLocalMap();
+  // Localising: the keyframe's depth readings that no map point holds, as temporary points.
+  void LiftKeyFrameDepth(KeyFrame* keyframe, long frame_id);
   void SearchLocalPoints();
   bool InFrustum(MapPoint* point, double min_view_cos) const;
   bool NeedNewKeyFrame() const;
@@ -175,7 +177,8 @@ class Tracker {
   std::deque<PoseUncertainty> recent_uncertainty_;  // of the last tracked frames, oldest first
   std::vector<KeyFrame*> local_keyframes_;
   std::vector<MapPoint*> local_points_;
-  std::vector<std::unique_ptr<MapPoint>> temporary_points_;  // visual odometry of the last frame
+  // Live for one frame: visual odometry of the last frame, lifted keyframe depth (localising).
+  std::vector<std::unique_ptr<MapPoint>> temporary_points_;
   std::vector<FrameRecord> records_;
 };
 
