@@ -1,5 +1,6 @@
 #include "noctua/dynamic/async_masks.h"
 
+#include <cstdlib>
 #include <opencv2/imgproc.hpp>
 
 #include "noctua/util/error.h"
@@ -22,7 +23,7 @@ AsyncMaskPipeline::AsyncMaskPipeline(std::shared_ptr<Detector> detector, MotionL
   if (!detector_) throw Error("asynchronous dynamic masks without a detector");
   mask_options_.Check();
   async_options_.Check();
-  worker_ = std::thread([this] { Work(); });
+  worker_ = std::thread([this] { async_options_.wait_for_detection ? Work() : DetectNewest(); });
 }
 
 AsyncMaskPipeline::~AsyncMaskPipeline() {
@@ -44,12 +45,14 @@ void AsyncMaskPipeline::Submit(const cv::Mat& image, const cv::Mat& depth_m) {
   {
     std::lock_guard lock(mutex_);
     frames_.push_back({image, depth_m});
+    newest_submitted_ = frames_.back();
     ++submitted_;
   }
   changed_.notify_all();
 }
 
 cv::Mat AsyncMaskPipeline::Next() {
+  if (!async_options_.wait_for_detection) return CarryNewest();
   std::unique_lock lock(mutex_);
   if (OutstandingLocked() == 0) {
     throw Error("asynchronous dynamic masks: Next() without a submitted frame");
@@ -61,6 +64,61 @@ cv::Mat AsyncMaskPipeline::Next() {
   lock.unlock();
   if (result.error) std::rethrow_exception(result.error);
   return result.mask;
+}
+
+cv::Mat AsyncMaskPipeline::CarryNewest() {
+  std::unique_lock lock(mutex_);
+  if (OutstandingLocked() == 0) {
+    throw Error("asynchronous dynamic masks: Next() without a submitted frame");
+  }
+  const long index = taken_++;
+  const Submitted frame = frames_.front();  // frames_ holds the frames not taken, in order
+  frames_.pop_front();
+  changed_.wait(lock, [this] { return newest_.has_value(); });
+  const Detection detection = *newest_;
+  lock.unlock();
+  if (detection.error) std::rethrow_exception(detection.error);
+  if (detection.size != frame.image.size()) {
+    throw Error("asynchronous dynamic masks: frames of different sizes in one sequence");
+  }
+  const int age = static_cast<int>(std::abs(index - detection.index));
+  return DynamicObjectsMask(detection.objects, mask_options_, detection.size, frame.depth_m,
+                            age * async_options_.carried_growth_px);
+}
+
+void AsyncMaskPipeline::DetectNewest() {
+  for (;;) {
+    Submitted frame;
+    long index = 0;
+    {
+      std::unique_lock lock(mutex_);
+      changed_.wait(lock, [this] { return stop_ || submitted_ - 1 >= next_due_; });
+      if (stop_) return;
+      index = submitted_ - 1;
+      frame = newest_submitted_;
+    }
+    Detection detection;
+    detection.index = index;
+    detection.size = frame.image.size();
+    try {
+      detection.objects = FindDynamicObjects(detector_->Detect(frame.image), table_, mask_options_,
+                                             detection.size, frame.depth_m);
+    } catch (...) {
+      detection.error = std::current_exception();
+    }
+    {
+      std::lock_guard lock(mutex_);
+      newest_ = std::move(detection);
+      next_due_ = index + async_options_.every_n;
+      ++detections_;
+    }
+    changed_.notify_all();
+  }
+}
+
+long AsyncMaskPipeline::detections() const {
+  std::lock_guard lock(mutex_);
+  return detections_;
 }
 
 int AsyncMaskPipeline::outstanding() const {
@@ -86,6 +144,10 @@ void AsyncMaskPipeline::Work() {
       const cv::Size size = frame.image.size();
       if (index % async_options_.every_n == 0 || detected_size != size) {
         detected_size = cv::Size();
+        {
+          std::lock_guard lock(mutex_);
+          ++detections_;
+        }
         objects = FindDynamicObjects(detector_->Detect(frame.image), table_, mask_options_, size,
                                      frame.depth_m);
         detected_size = size;

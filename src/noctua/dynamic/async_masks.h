@@ -6,7 +6,9 @@
 #include <memory>
 #include <mutex>
 #include <opencv2/core.hpp>
+#include <optional>
 #include <thread>
+#include <vector>
 
 #include "noctua/dynamic/dynamic_mask.h"
 
@@ -24,6 +26,12 @@ struct AsyncMaskOptions {
   // detected in their own frame: 431 with 0 px, 98 with 10 px, 19 with 20 px (pipeline test
   // CreateMethod.GrowingCarriedMasksKeepsPointsOffThePeopleAsTheyMove).
   int carried_growth_px = 20;
+  // true: a frame's mask waits for its own detection, or the one it carries (the masks depend on
+  // the frame order only: offline runs repeat). false, for frames that arrive in real time (a
+  // camera, a replay): a frame never waits for the detector; it carries the newest detection
+  // finished by then (grown by its age in frames, either way), and the detector takes the newest
+  // frame when it is free, at most every N-th, so its share of the processor falls under load.
+  bool wait_for_detection = true;
   void Check() const;
 };
 
@@ -38,7 +46,7 @@ struct AsyncMaskOptions {
 //   }
 //
 // Masks come back in submission order. The detector is used only by the worker thread while the
-// pipeline lives. A submitted image's pixels must stay unchanged until its mask has come back.
+// pipeline lives. A submitted image's pixels must stay unchanged while the pipeline lives.
 class AsyncMaskPipeline {
  public:
   AsyncMaskPipeline(std::shared_ptr<Detector> detector, MotionLevelTable table,
@@ -50,11 +58,15 @@ class AsyncMaskPipeline {
   // Queues a frame for detection; returns at once. With the frame's depth (CV_32F metres, 0 =
   // none), regions are cut to their objects' depth segments (DynamicMaskOptions::depth_segment).
   void Submit(const cv::Mat& image, const cv::Mat& depth_m = cv::Mat());
-  // Waits for the mask of the oldest submitted frame whose mask has not been taken. Rethrows what
-  // detection threw for that frame. Throws noctua::Error when no frame is outstanding.
+  // The mask of the oldest submitted frame whose mask has not been taken: waits for its
+  // detection (AsyncMaskOptions::wait_for_detection), or only for the first one. Rethrows what
+  // detection threw for that frame (without waiting: the last detection). Throws noctua::Error
+  // when no frame is outstanding.
   cv::Mat Next();
   // Frames submitted whose masks have not been taken.
   int outstanding() const;
+  // Frames the detector has run on so far.
+  long detections() const;
 
  private:
   struct Result {
@@ -62,6 +74,9 @@ class AsyncMaskPipeline {
     std::exception_ptr error;
   };
   void Work();
+  // Without waiting: detects the newest submitted frame due, and keeps the result in `newest_`.
+  void DetectNewest();
+  cv::Mat CarryNewest();
   int OutstandingLocked() const { return static_cast<int>(submitted_ - taken_); }
 
   std::shared_ptr<Detector> detector_;
@@ -77,6 +92,17 @@ class AsyncMaskPipeline {
   };
   std::deque<Submitted> frames_;
   std::deque<Result> results_;
+  // Without waiting: the newest detection finished (frame index, its objects and image size).
+  struct Detection {
+    long index = -1;
+    std::vector<DynamicObject> objects;
+    cv::Size size;
+    std::exception_ptr error;
+  };
+  std::optional<Detection> newest_;
+  Submitted newest_submitted_;
+  long next_due_ = 0;  // the first frame index the detector may take next
+  long detections_ = 0;
   long submitted_ = 0;
   long taken_ = 0;
   bool stop_ = false;

@@ -2,9 +2,14 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
+#include <condition_variable>
 #include <fstream>
+#include <functional>
+#include <mutex>
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgproc.hpp>
+#include <thread>
 
 #include "noctua/dynamic/async_masks.h"
 #include "noctua/dynamic/coco.h"
@@ -234,6 +239,90 @@ TEST_F(Fr3Test, AsyncMasksPassOnDetectionErrors) {
   masks.Submit((*frames_)[0]);
   EXPECT_THROW(masks.Next(), Error);
   EXPECT_GT(cv::countNonZero(masks.Next()), 0);
+}
+
+// Polls `done` for up to 10 s.
+void WaitFor(const std::function<bool()>& done) {
+  for (int waited_ms = 0; !done() && waited_ms < 10000; waited_ms += 2) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+}
+
+// One person per frame, at x = 10 × the frame's grey value.
+std::vector<Detection> PersonAt(const cv::Mat& image) {
+  return {Box(CocoClassId("person"), 10.0f * image.at<uchar>(0, 0), 10.0f, 20.0f, 40.0f)};
+}
+
+// PersonAt, held inside Detect until the test allows the call: a detector slower than the frames.
+class GatedDetector : public Detector {
+ public:
+  std::vector<Detection> Detect(const cv::Mat& image) override {
+    std::unique_lock lock(mutex_);
+    ++entered_;
+    open_.wait(lock, [this] { return calls_ < allowed_; });
+    ++calls_;
+    return PersonAt(image);
+  }
+  void Allow(int calls) {
+    std::lock_guard lock(mutex_);
+    allowed_ = calls;
+    open_.notify_all();
+  }
+  int entered() {
+    std::lock_guard lock(mutex_);
+    return entered_;
+  }
+  ModelKind kind() const override { return ModelKind::kYoloV8Head; }
+  bool has_masks() const override { return false; }
+  const DetectorOptions& options() const override { return options_; }
+
+ private:
+  std::mutex mutex_;
+  std::condition_variable open_;
+  int entered_ = 0;
+  int calls_ = 0;
+  int allowed_ = 0;
+  DetectorOptions options_;
+};
+
+TEST(AsyncMasksWithoutWaiting, CarryTheNewestDetectionAndSkipFramesTheDetectorCannotTake) {
+  auto detector = std::make_shared<GatedDetector>();
+  const MotionLevelTable table;
+  const DynamicMaskOptions options;
+  constexpr int kGrowth = 2;
+  AsyncMaskOptions async{1, kGrowth};
+  async.wait_for_detection = false;
+  AsyncMaskPipeline masks(detector, table, options, async);
+  const cv::Size size(100, 80);
+  const auto frame = [&](int k) { return cv::Mat(size, CV_8UC1, cv::Scalar(k)); };
+  // Frame d's detection carried to frame k.
+  const auto carried = [&](int d, int k) {
+    const auto objects = FindDynamicObjects(PersonAt(frame(d)), table, options, size);
+    return DynamicObjectsMask(objects, options, size, cv::Mat(), std::abs(k - d) * kGrowth);
+  };
+  const auto expect_mask = [&](int d, int k) {
+    EXPECT_EQ(cv::norm(masks.Next(), carried(d, k), cv::NORM_L1), 0.0)
+        << "frame " << k << " should carry frame " << d << "'s detection";
+  };
+  masks.Submit(frame(0));
+  detector->Allow(1);
+  expect_mask(0, 0);  // the first frame waits for the first detection
+  // The detector is held on frame 1: frames 1-3 do not wait, they carry frame 0's detection.
+  masks.Submit(frame(1));
+  WaitFor([&] { return detector->entered() == 2; });
+  masks.Submit(frame(2));
+  masks.Submit(frame(3));
+  for (int k = 1; k <= 3; ++k) expect_mask(0, k);
+  EXPECT_EQ(masks.detections(), 1);
+  // Let it go: it finishes frame 1, then takes the newest frame, 3, and leaves 2 out.
+  detector->Allow(3);
+  WaitFor([&] { return masks.detections() == 3; });
+  ASSERT_EQ(masks.detections(), 3);
+  masks.Submit(frame(4));  // held again
+  expect_mask(3, 4);
+  EXPECT_EQ(masks.outstanding(), 0);
+  EXPECT_THROW(masks.Next(), Error);
+  detector->Allow(100);  // the worker stops only between detections
 }
 
 TEST_F(Fr3Test, NoFeaturePointRemainsOnThePeopleAfterTheMask) {

@@ -115,6 +115,25 @@ TEST(SlamReplayTest, SlowEnoughDropsNoneAndTracksLikeTheUntimedRun) {
   EXPECT_NE(csv.find(",total_ms,latency_ms\n"), std::string::npos);
 }
 
+// In real time nothing can be detected ahead of its frame: a replayed frame takes the newest
+// detection finished instead of waiting for its own; read as fast as it goes, every 3rd frame is
+// detected ahead and every frame waits for its mask.
+TEST(SlamReplayTest, AReplayedFrameNeverWaitsForTheDetector) {
+  SlamRunOptions options = ReplayOptions(1.0);
+  options.detector_model = (testing::ModelsDir() / "yolov8n" / "yolov8n_head_f32.onnx").string();
+  const SlamRunReport replayed = RunSlam(options);
+  ExpectConsistent(replayed);
+  const nlohmann::json& live = replayed.json["detection"];
+  EXPECT_THAT(live["mode"].get<std::string>(), HasSubstr("never wait"));
+  EXPECT_GE(live["frames_detected"].get<int>(), 1);
+  EXPECT_LE(live["frames_detected"].get<int>(), (kFrames + 2) / 3);
+  options.source.replay_rate = 0.0;
+  const SlamRunReport untimed = RunSlam(options);
+  const nlohmann::json& ahead = untimed.json["detection"];
+  EXPECT_THAT(ahead["mode"].get<std::string>(), HasSubstr("submitted ahead"));
+  EXPECT_EQ(ahead["frames_detected"].get<int>(), (kFrames + 2) / 3);
+}
+
 TEST(SlamReplayTest, ABagPlaysInRealTimeToo) {
   const fs::path bag =
       fs::temp_directory_path() / ("noctua_slam_replay_" + std::to_string(::getpid()) + ".bag");

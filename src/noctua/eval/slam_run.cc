@@ -69,10 +69,15 @@ nlohmann::json RunJson(const SlamRunOptions& options, const SlamRunReport& repor
   json["frames_per_second"] = run.FramesPerSecond();
   json["overlap_extraction"] = !options.sequential;
   if (!config.detector_model.empty()) {
-    const bool ahead = method.detection_ahead() != nullptr;
+    const auto ahead = method.detection_ahead();
+    const char* mode = ahead == nullptr ? "inline"
+                       : config.detect_ahead_options.wait_for_detection
+                           ? "own thread, frames submitted ahead"
+                           : "own thread, frames never wait (newest detection carried)";
     json["detection"] = {{"model", config.detector_model},
-                         {"mode", ahead ? "own thread, frames submitted ahead" : "inline"},
+                         {"mode", mode},
                          {"every_n_frames", ahead ? options.detect_every : 1}};
+    if (ahead != nullptr) json["detection"]["frames_detected"] = ahead->detections();
   }
   // Memory next to the map size, so that a long run shows whether memory follows the map.
   json["memory"] = {{"peak_rss_mb", PeakResidentMemoryMb()},
@@ -185,6 +190,9 @@ pipeline::MethodConfig RunMethodConfig(const SlamRunOptions& options) {
       pipeline::LoadMethodConfig(options.config, options.detector_model);
   config.detect_ahead = !options.detect_inline;
   config.detect_ahead_options.every_n = options.detect_every;
+  // Frames that arrive in real time do not wait for the detector (it cannot look ahead of them).
+  config.detect_ahead_options.wait_for_detection =
+      options.source.replay_rate <= 0.0 && !options.source.live.has_value();
   return config;
 }
 
