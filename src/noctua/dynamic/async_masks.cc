@@ -75,7 +75,7 @@ cv::Mat AsyncMaskPipeline::CarryNewest() {
   const Submitted frame = frames_.front();  // frames_ holds the frames not taken, in order
   frames_.pop_front();
   changed_.wait(lock, [this] { return newest_.has_value(); });
-  const Detection detection = *newest_;
+  const FinishedDetection detection = *newest_;
   lock.unlock();
   if (detection.error) std::rethrow_exception(detection.error);
   if (detection.size != frame.image.size()) {
@@ -97,7 +97,7 @@ void AsyncMaskPipeline::DetectNewest() {
       index = submitted_ - 1;
       frame = newest_submitted_;
     }
-    Detection detection;
+    FinishedDetection detection;
     detection.index = index;
     detection.size = frame.image.size();
     try {

@@ -93,13 +93,13 @@ class AsyncMaskPipeline {
   std::deque<Submitted> frames_;
   std::deque<Result> results_;
   // Without waiting: the newest detection finished (frame index, its objects and image size).
-  struct Detection {
+  struct FinishedDetection {
     long index = -1;
     std::vector<DynamicObject> objects;
     cv::Size size;
     std::exception_ptr error;
   };
-  std::optional<Detection> newest_;
+  std::optional<FinishedDetection> newest_;
   Submitted newest_submitted_;
   long next_due_ = 0;  // the first frame index the detector may take next
   long detections_ = 0;
