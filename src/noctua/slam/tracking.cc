@@ -15,7 +15,7 @@ namespace noctua::slam {
 namespace {
 
 // Ids of temporary points, which live for one frame: the last frame's depth points (visual
-// odometry), and, localising, the depth points of the local keyframes, which count as the map's.
+// odometry), and, localising, the reference keyframe's depth points, which count as the map's.
 constexpr long kOdometryPointId = -1;
 constexpr long kKeyFramePointId = -2;
 
@@ -543,9 +543,9 @@ void Tracker::UpdateLocalMap() {
   }
   // Localising, the map cannot grow: points a fast stretch's keyframes made and later keyframes
   // did not confirm were culled, yet the keyframes kept their depth readings. Lifted with the
-  // keyframes' refined poses they place the frame as the culled points did, without the drift of
-  // the last frame's depth points.
-  // The reference keyframe's alone: the one nearest the frame, and a frame's worth of points.
+  // keyframe's refined pose they place the frame as the culled points did, without the drift of
+  // the last frame's depth points. The reference keyframe's alone: every local keyframe's gave
+  // the same accuracy at twice the time (docs/slam.md).
   if (localize_ && best != nullptr) LiftKeyFrameDepth(best, frame.id);
 }
 
