@@ -106,6 +106,10 @@ struct Frame {
   std::vector<bool> moving;
   // Whether `moving` was found over a whole baseline (MotionSegmenter::had_baseline).
   bool moving_known = false;
+  // Keypoints matched over the segmenter's baseline and found static (MotionSegmenter::
+  // proven_static); empty when moving points are not rejected. Map points made from the others
+  // start on probation (MapPoint::proven).
+  std::vector<bool> proven_static;
   geometry::Pose pose_cw = geometry::Pose::Identity();  // world to camera
 };
 

@@ -79,6 +79,12 @@ class MapPoint {
   int track_level = 0;
   long local_ba_keyframe = -1;
   int moving_frames = 0;  // tracked frames in a row in which the point moved against the world
+  // With moving points rejected (SlamOptions::reject_moving_points): whether the point has shown
+  // that it is static, by a keypoint judged static when it was made or, later, by keeping its
+  // distances to the static world over the segmenter's baseline since `created_at_s`. A point on
+  // probation is matched but does not pull on a frame's pose (Tracker::TrackLocalMap).
+  bool proven = true;
+  double created_at_s = 0.0;
 
  private:
   // Seen at `distance` on pyramid `level`: the distances at which it can be detected at all.

@@ -257,6 +257,7 @@ PointPair Lift(const FrameFeatures& reference, int r, const FrameFeatures& curre
 std::vector<bool> MotionSegmenter::FlagMoving(std::shared_ptr<const FrameFeatures> features,
                                               double timestamp) {
   std::vector<bool> moving(static_cast<std::size_t>(features->size()), false);
+  proven_static_.assign(moving.size(), false);
   const FrameFeatures* reference = Reference(timestamp);
   had_baseline_ = !history_.empty() && history_.front().first <= timestamp - options_.baseline_s;
   if (reference != nullptr) {
@@ -272,6 +273,7 @@ std::vector<bool> MotionSegmenter::FlagMoving(std::shared_ptr<const FrameFeature
       moving[c] = !is_static[p];
     }
     GrowMovingRegions(*features, options_.region, judged, moving);
+    for (std::size_t i = 0; i < moving.size(); ++i) proven_static_[i] = judged[i] && !moving[i];
   }
   history_.emplace_back(timestamp, std::move(features));
   // Keep what a later frame may use as its reference: everything within the baseline and the

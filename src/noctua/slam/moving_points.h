@@ -111,6 +111,11 @@ class MotionSegmenter {
   // moved further than the noise, and a map started then is built on people as much as on the
   // world.
   bool had_baseline() const { return had_baseline_; }
+  // One flag per keypoint of the last FlagMoving: matched over the baseline and found to keep its
+  // distances to the static world. Only these have shown that they are static; a keypoint that
+  // could not be matched (a person turning, deforming, or leaving the view does not match over a
+  // third of a second) is unjudged, not static.
+  const std::vector<bool>& proven_static() const { return proven_static_; }
 
  private:
   const FrameFeatures* Reference(double timestamp) const;
@@ -118,6 +123,7 @@ class MotionSegmenter {
   MotionSegmenterOptions options_;
   std::vector<double> scales_;
   bool had_baseline_ = false;
+  std::vector<bool> proven_static_;
   std::deque<std::pair<double, std::shared_ptr<const FrameFeatures>>> history_;
 };
 

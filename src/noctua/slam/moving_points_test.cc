@@ -167,5 +167,56 @@ TEST(LiftedPointSigma, GrowsWithDepthAndPyramidLevel) {
   EXPECT_NEAR(LiftedPointSigma(1.0, 1.0, 525.0), 0.0034, 0.0002);
 }
 
+// Two frames 0.4 s apart of a wall 3 m away and a person who walked from 1.5 to 1.9 m away; 20
+// wall keypoints of the second frame look different (fresh descriptors) and cannot be matched.
+// Proven static: exactly the wall keypoints matched over the baseline; the person moved, the 20
+// were never judged.
+TEST(MotionSegmenter, ProvesStaticOnlyTheKeypointsMatchedOverTheBaseline) {
+  const geometry::PinholeCamera camera(
+      {.fx = 500, .fy = 500, .cx = 320, .cy = 240, .width = 640, .height = 480},
+      geometry::Distortion());
+  const cv::Rect person(220, 40, 200, 440);
+  std::vector<cv::KeyPoint> keypoints;
+  for (int y = 20; y < 480; y += 40) {
+    for (int x = 20; x < 640; x += 40) {
+      keypoints.emplace_back(cv::Point2f(static_cast<float>(x), static_cast<float>(y)), 31.0f);
+    }
+  }
+  const int count = static_cast<int>(keypoints.size());
+  cv::Mat descriptors(count, 32, CV_8U);
+  cv::RNG rng(7);
+  rng.fill(descriptors, cv::RNG::UNIFORM, 0, 256);
+  const auto frame = [&](float person_depth, const cv::Mat& rows) {
+    cv::Mat depth(480, 640, CV_32F, cv::Scalar(3.0f));
+    depth(person).setTo(person_depth);
+    return std::make_shared<const FrameFeatures>(keypoints, rows, depth, camera, 40.0, 0.1);
+  };
+  std::vector<bool> on_person(static_cast<std::size_t>(count), false);
+  std::vector<bool> unmatched(static_cast<std::size_t>(count), false);
+  cv::Mat later = descriptors.clone();
+  int fresh = 0;
+  for (int i = 0; i < count; ++i) {
+    on_person[static_cast<std::size_t>(i)] =
+        person.contains(keypoints[static_cast<std::size_t>(i)].pt);
+    if (!on_person[static_cast<std::size_t>(i)] && fresh < 20 && i % 3 == 0) {
+      rng.fill(later.row(i), cv::RNG::UNIFORM, 0, 256);
+      unmatched[static_cast<std::size_t>(i)] = true;
+      ++fresh;
+    }
+  }
+  MotionSegmenter segmenter(MotionSegmenterOptions(), ScalePyramid(1.2, 8));
+  segmenter.FlagMoving(frame(1.5f, descriptors), 0.0);
+  const std::vector<bool> moving = segmenter.FlagMoving(frame(1.9f, later), 0.4);
+  ASSERT_TRUE(segmenter.had_baseline());
+  const std::vector<bool>& proven = segmenter.proven_static();
+  ASSERT_EQ(proven.size(), static_cast<std::size_t>(count));
+  for (std::size_t i = 0; i < proven.size(); ++i) {
+    EXPECT_EQ(proven[i], !on_person[i] && !unmatched[i]) << "keypoint " << i;
+    if (on_person[i]) {
+      EXPECT_TRUE(moving[i]) << "keypoint " << i;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace noctua::slam

@@ -129,7 +129,8 @@ PoseUncertainty EstimatePoseUncertainty(const Frame& frame, const ScalePyramid& 
   return uncertainty;
 }
 
-int OptimizePose(Frame& frame, const ScalePyramid& pyramid, double bf, const CentrePrior* prior) {
+int OptimizePose(Frame& frame, const ScalePyramid& pyramid, double bf, const CentrePrior* prior,
+                 const std::vector<bool>* on_probation) {
   const FrameFeatures& features = *frame.features;
   const Intrinsics k = IntrinsicsOf(features, bf);
   std::vector<int> matched;
@@ -161,6 +162,7 @@ int OptimizePose(Frame& frame, const ScalePyramid& pyramid, double bf, const Cen
     int residual_blocks = 0;
     for (int i : matched) {
       if (frame.outlier[static_cast<std::size_t>(i)]) continue;
+      if (on_probation != nullptr && (*on_probation)[static_cast<std::size_t>(i)]) continue;
       const Observation o = ObservationOf(features, i, pyramid);
       const Eigen::Vector3d point = frame.map_points[static_cast<std::size_t>(i)]->position();
       if (o.stereo) {

@@ -31,8 +31,11 @@ struct CentrePrior {
   double sigma_m = 0.0;
   double outlier_sigmas = 0.0;  // 0: Gaussian everywhere
 };
+// Matches flagged in `on_probation` (one flag per keypoint) do not pull on the pose; each round
+// still sorts them into inliers and outliers against it, as the others.
 int OptimizePose(Frame& frame, const ScalePyramid& pyramid, double bf,
-                 const CentrePrior* prior = nullptr);
+                 const CentrePrior* prior = nullptr,
+                 const std::vector<bool>* on_probation = nullptr);
 
 // How well a tracked pose is determined by its inlier matches: the marginal standard deviations
 // of the camera's position and orientation, from the Gauss-Newton information J^T J of the

@@ -181,5 +181,29 @@ TEST_F(CentrePriorTest, ARobustOneYieldsToMatchesThatAgreeFarFromIt) {
   EXPECT_LT((a.pose_cw.inverse().translation() - b.pose_cw.inverse().translation()).norm(), 2e-4);
 }
 
+// A body of 10 points that moved 5 cm together since they were mapped pulls a pose that all 25
+// matches fix; put on probation, they do not, and are still sorted out as outliers, while points
+// on probation that did not move come out inliers.
+TEST_F(CentrePriorTest, MatchesOnProbationDoNotPullThePoseButAreJudged) {
+  const auto displaced = [](Frame& frame) {
+    for (std::size_t i = 0; i < 10; ++i) {
+      MapPoint* point = frame.map_points[i];
+      point->set_position(point->position() + Eigen::Vector3d(0.05, 0.0, 0.0));
+    }
+  };
+  Frame pulled = MakeDeepFrame();
+  displaced(pulled);
+  OptimizePose(pulled, pyramid_, 40.0);
+  EXPECT_GT(pulled.pose_cw.inverse().translation().norm(), 0.005);
+
+  Frame held = MakeDeepFrame();
+  displaced(held);
+  std::vector<bool> on_probation(25, false);
+  for (std::size_t i = 0; i < 13; ++i) on_probation[i] = true;  // the 10 moved and 3 that did not
+  EXPECT_EQ(OptimizePose(held, pyramid_, 40.0, nullptr, &on_probation), 15);
+  EXPECT_LT(held.pose_cw.inverse().translation().norm(), 1e-3);
+  for (std::size_t i = 0; i < 25; ++i) EXPECT_EQ(held.outlier[i], i < 10) << "match " << i;
+}
+
 }  // namespace
 }  // namespace noctua::slam

@@ -58,6 +58,7 @@ RgbdSlam::Extracted RgbdSlam::Extract(const cv::Mat& image, const cv::Mat& depth
     watch.Restart();
     extracted.moving = segmenter_->FlagMoving(extracted.features, timestamp);
     extracted.moving_known = segmenter_->had_baseline();
+    extracted.proven_static = segmenter_->proven_static();
     extracted.moving_ms = watch.ElapsedMs();
   }
   return extracted;
@@ -68,6 +69,7 @@ TrackResult RgbdSlam::Track(Extracted extracted, bool advance_mapping) {
   Frame frame(next_frame_id_++, extracted.timestamp, std::move(extracted.features));
   if (!extracted.moving.empty()) frame.moving = std::move(extracted.moving);
   frame.moving_known = extracted.moving_known;
+  if (!extracted.proven_static.empty()) frame.proven_static = std::move(extracted.proven_static);
   TrackResult result = tracker_.Track(std::move(frame));
   result.stage_ms["extract"] = extracted.extract_ms;
   if (segmenter_ != nullptr) result.stage_ms["moving"] = extracted.moving_ms;

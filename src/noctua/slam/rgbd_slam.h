@@ -36,9 +36,11 @@ class RgbdSlam {
     std::shared_ptr<const FrameFeatures> features;
     double timestamp = 0.0;
     double extract_ms = 0.0;
-    // With SlamOptions::reject_moving_points: the keypoints found moving (MotionSegmenter), one
-    // flag per keypoint, whether a whole baseline was seen, and the time it took.
+    // With SlamOptions::reject_moving_points: the keypoints found moving and those proven static
+    // (MotionSegmenter), one flag per keypoint, whether a whole baseline was seen, and the time
+    // it took.
     std::vector<bool> moving;
+    std::vector<bool> proven_static;
     bool moving_known = false;
     double moving_ms = 0.0;
   };

@@ -101,7 +101,8 @@ void ReadSlamSection(const YAML::Node& root, const std::string& source, SlamOpti
                                                "motion_prior_acceleration_mps2",
                                                "motion_prior_outlier_sigmas",
                                                "loop_closing",
-                                               "loop_min_inliers"};
+                                               "loop_min_inliers",
+                                               "probation_for_new_points"};
   for (const auto& entry : section) {
     const auto key = entry.first.as<std::string>();
     if (!kKnown.contains(key)) {
@@ -117,6 +118,7 @@ void ReadSlamSection(const YAML::Node& root, const std::string& source, SlamOpti
                   options.motion_prior_outlier_sigmas);
   io::ReadSetting(section, "loop_closing", source, options.loop_closing.enabled);
   io::ReadSetting(section, "loop_min_inliers", source, options.loop_closing.min_loop_inliers);
+  io::ReadSetting(section, "probation_for_new_points", source, options.probation_for_new_points);
 }
 
 }  // namespace

@@ -213,6 +213,7 @@ bool Tracker::Initialise(Frame& frame) {
     keyframe->SetMapPoint(i, point);
     point->UpdateDescriptor();
     point->UpdateNormalAndDepth(pyramid_);
+    StartProbation(frame, i, point);
     frame.map_points[static_cast<std::size_t>(i)] = point;
   }
   reference_ = last_keyframe_ = keyframe;
@@ -597,12 +598,22 @@ bool Tracker::TrackLocalMap() {
   Frame& frame = *current_;
   RejectMovingMatches(true);
   const std::optional<CentrePrior> prior = MotionPrior();
-  OptimizePose(frame, pyramid_, options_.bf, prior ? &*prior : nullptr);
+  const std::vector<bool> on_probation = MatchesOnProbation();
+  OptimizePose(frame, pyramid_, options_.bf, prior ? &*prior : nullptr,
+               on_probation.empty() ? nullptr : &on_probation);
   inliers_ = 0;
   odometry_inliers_ = 0;
   for (std::size_t i = 0; i < frame.map_points.size(); ++i) {
     MapPoint* point = frame.map_points[i];
     if (point == nullptr) continue;
+    if (!on_probation.empty() && on_probation[i]) {
+      // Fitting the pose, it counts as tracked; it is not found, and the keyframe made from this
+      // frame does not observe it, so it gains no weight in the map before it is proven.
+      if (!frame.outlier[i]) ++inliers_;
+      frame.map_points[i] = nullptr;
+      frame.outlier[i] = false;
+      continue;
+    }
     if (!frame.outlier[i]) {
       point->IncreaseFound();
       const bool in_map = point->num_observations() > 0 || point->id() == kKeyFramePointId;
@@ -652,6 +663,10 @@ int Tracker::RejectMovingMatches(bool vote) {
     MapPoint* point = frame.map_points[i];
     const bool in_map = point->num_observations() > 0;
     if (vote && in_map) point->moving_frames = is_static[p] ? 0 : point->moving_frames + 1;
+    if (vote && in_map && is_static[p] &&
+        frame.timestamp - point->created_at_s >= options_.moving.baseline_s) {
+      point->proven = true;
+    }
     if (is_static[p]) continue;
     frame.map_points[i] = nullptr;
     frame.outlier[i] = false;
@@ -662,6 +677,29 @@ int Tracker::RejectMovingMatches(bool vote) {
     }
   }
   return rejected;
+}
+
+std::vector<bool> Tracker::MatchesOnProbation() const {
+  if (!options_.reject_moving_points || !options_.probation_for_new_points) return {};
+  const Frame& frame = *current_;
+  std::vector<bool> on_probation(frame.map_points.size(), false);
+  int proven = 0;
+  for (std::size_t i = 0; i < frame.map_points.size(); ++i) {
+    const MapPoint* point = frame.map_points[i];
+    if (point == nullptr || point->num_observations() == 0) continue;
+    if (point->proven) {
+      ++proven;
+    } else {
+      on_probation[i] = true;
+    }
+  }
+  if (proven < options_.min_tracked_inliers) return {};
+  return on_probation;
+}
+
+void Tracker::StartProbation(const Frame& frame, int i, MapPoint* point) {
+  point->created_at_s = frame.timestamp;
+  point->proven = frame.proven_static.empty() || frame.proven_static[static_cast<std::size_t>(i)];
 }
 
 bool Tracker::AsCertainAsRecentFrames() const {
@@ -731,6 +769,7 @@ void Tracker::CreateNewKeyFrame() {
       keyframe->SetMapPoint(i, point);
       point->UpdateDescriptor();
       point->UpdateNormalAndDepth(pyramid_);
+      StartProbation(frame, i, point);
       frame.map_points[index] = point;
       frame.outlier[index] = false;
     }

@@ -138,6 +138,12 @@ class Tracker {
   // map point counts a frame of motion and is culled after moving_frames_to_cull in a row.
   // Returns how many it dropped.
   int RejectMovingMatches(bool vote);
+  // One flag per match of the current frame: the map points still on probation
+  // (SlamOptions::probation_for_new_points); empty when the proven ones are too few to track the
+  // frame alone, or probation is off.
+  std::vector<bool> MatchesOnProbation() const;
+  // A point made from keypoint `i` of `frame` starts proven when the segmenter judged it static.
+  static void StartProbation(const Frame& frame, int i, MapPoint* point);
   void ClearTemporaryPoints();
   void ReclaimMapPoints();
 
