@@ -104,9 +104,9 @@ struct Frame {
   // Keypoints on something that moves against the static world (moving_points.h): not matched,
   // not mapped.
   std::vector<bool> moving;
-  // Whether `moving` was found over a whole baseline (MotionSegmenter::had_baseline).
+  // Whether `moving` was found over a whole baseline (MotionVerdicts::whole_baseline).
   bool moving_known = false;
-  // Keypoints matched over the segmenter's baseline and found static (MotionSegmenter::
+  // Keypoints matched over the segmenter's baseline and found static (MotionVerdicts::
   // proven_static); empty when moving points are not rejected. Map points made from the others
   // start on probation (MapPoint::proven).
   std::vector<bool> proven_static;

@@ -254,12 +254,15 @@ PointPair Lift(const FrameFeatures& reference, int r, const FrameFeatures& curre
 
 }  // namespace
 
-std::vector<bool> MotionSegmenter::FlagMoving(std::shared_ptr<const FrameFeatures> features,
-                                              double timestamp) {
-  std::vector<bool> moving(static_cast<std::size_t>(features->size()), false);
-  proven_static_.assign(moving.size(), false);
+MotionVerdicts MotionSegmenter::FlagMoving(std::shared_ptr<const FrameFeatures> features,
+                                           double timestamp) {
+  MotionVerdicts verdicts;
+  std::vector<bool>& moving = verdicts.moving;
+  moving.assign(static_cast<std::size_t>(features->size()), false);
+  verdicts.proven_static.assign(moving.size(), false);
   const FrameFeatures* reference = Reference(timestamp);
-  had_baseline_ = !history_.empty() && history_.front().first <= timestamp - options_.baseline_s;
+  verdicts.whole_baseline =
+      !history_.empty() && history_.front().first <= timestamp - options_.baseline_s;
   if (reference != nullptr) {
     const auto matches =
         MatchWithDepth(*features, *reference, options_.max_descriptor_distance, options_.ratio);
@@ -273,7 +276,9 @@ std::vector<bool> MotionSegmenter::FlagMoving(std::shared_ptr<const FrameFeature
       moving[c] = !is_static[p];
     }
     GrowMovingRegions(*features, options_.region, judged, moving);
-    for (std::size_t i = 0; i < moving.size(); ++i) proven_static_[i] = judged[i] && !moving[i];
+    for (std::size_t i = 0; i < moving.size(); ++i) {
+      verdicts.proven_static[i] = judged[i] && !moving[i];
+    }
   }
   history_.emplace_back(timestamp, std::move(features));
   // Keep what a later frame may use as its reference: everything within the baseline and the
@@ -281,7 +286,7 @@ std::vector<bool> MotionSegmenter::FlagMoving(std::shared_ptr<const FrameFeature
   while (history_.size() > 2 && history_[1].first <= timestamp - options_.baseline_s) {
     history_.pop_front();
   }
-  return moving;
+  return verdicts;
 }
 
 }  // namespace noctua::slam

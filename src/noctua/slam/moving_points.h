@@ -95,6 +95,19 @@ struct MotionSegmenterOptions {
   void Check() const;
 };
 
+// What MotionSegmenter::FlagMoving found in one frame, one flag per keypoint.
+struct MotionVerdicts {
+  // On something that moves against the static world, or in the region around such a keypoint.
+  std::vector<bool> moving;
+  // Matched over the baseline and found to keep its distances to the static world. Only these
+  // have shown that they are static; a keypoint that could not be matched (a person turning,
+  // deforming, or leaving the view does not match over a third of a second) is unjudged.
+  std::vector<bool> proven_static;
+  // Whether a whole baseline was looked back over: before that, a slow mover has not moved
+  // further than the noise, and a map started then is built on people as much as on the world.
+  bool whole_baseline = false;
+};
+
 // Finds the keypoints of each frame that move against the static world, before the frame is
 // tracked: they are matched by descriptor to those of the frame baseline_s earlier, the pairs
 // with depth in both are sorted by FindStaticPairs, and the moving ones grow over their regions
@@ -104,26 +117,15 @@ class MotionSegmenter {
   // `pyramid`: the extractor's, for the detection error of a keypoint's level.
   MotionSegmenter(const MotionSegmenterOptions& options, const ScalePyramid& pyramid);
 
-  // One flag per keypoint of `features` (all false while no earlier frame is known, or too few
-  // pairs decide). The frame is kept as a later frame's reference.
-  std::vector<bool> FlagMoving(std::shared_ptr<const FrameFeatures> features, double timestamp);
-  // Whether the last FlagMoving looked a whole baseline back: before that, a slow mover has not
-  // moved further than the noise, and a map started then is built on people as much as on the
-  // world.
-  bool had_baseline() const { return had_baseline_; }
-  // One flag per keypoint of the last FlagMoving: matched over the baseline and found to keep its
-  // distances to the static world. Only these have shown that they are static; a keypoint that
-  // could not be matched (a person turning, deforming, or leaving the view does not match over a
-  // third of a second) is unjudged, not static.
-  const std::vector<bool>& proven_static() const { return proven_static_; }
+  // The verdicts on each keypoint of `features` (none moving while no earlier frame is known, or
+  // too few pairs decide). The frame is kept as a later frame's reference.
+  MotionVerdicts FlagMoving(std::shared_ptr<const FrameFeatures> features, double timestamp);
 
  private:
   const FrameFeatures* Reference(double timestamp) const;
 
   MotionSegmenterOptions options_;
   std::vector<double> scales_;
-  bool had_baseline_ = false;
-  std::vector<bool> proven_static_;
   std::deque<std::pair<double, std::shared_ptr<const FrameFeatures>>> history_;
 };
 

@@ -205,10 +205,11 @@ TEST(MotionSegmenter, ProvesStaticOnlyTheKeypointsMatchedOverTheBaseline) {
     }
   }
   MotionSegmenter segmenter(MotionSegmenterOptions(), ScalePyramid(1.2, 8));
-  segmenter.FlagMoving(frame(1.5f, descriptors), 0.0);
-  const std::vector<bool> moving = segmenter.FlagMoving(frame(1.9f, later), 0.4);
-  ASSERT_TRUE(segmenter.had_baseline());
-  const std::vector<bool>& proven = segmenter.proven_static();
+  EXPECT_FALSE(segmenter.FlagMoving(frame(1.5f, descriptors), 0.0).whole_baseline);
+  const MotionVerdicts verdicts = segmenter.FlagMoving(frame(1.9f, later), 0.4);
+  ASSERT_TRUE(verdicts.whole_baseline);
+  const std::vector<bool>& moving = verdicts.moving;
+  const std::vector<bool>& proven = verdicts.proven_static;
   ASSERT_EQ(proven.size(), static_cast<std::size_t>(count));
   for (std::size_t i = 0; i < proven.size(); ++i) {
     EXPECT_EQ(proven[i], !on_person[i] && !unmatched[i]) << "keypoint " << i;

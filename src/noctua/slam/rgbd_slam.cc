@@ -56,9 +56,7 @@ RgbdSlam::Extracted RgbdSlam::Extract(const cv::Mat& image, const cv::Mat& depth
   extracted.extract_ms = watch.ElapsedMs();
   if (segmenter_ != nullptr) {
     watch.Restart();
-    extracted.moving = segmenter_->FlagMoving(extracted.features, timestamp);
-    extracted.moving_known = segmenter_->had_baseline();
-    extracted.proven_static = segmenter_->proven_static();
+    extracted.motion = segmenter_->FlagMoving(extracted.features, timestamp);
     extracted.moving_ms = watch.ElapsedMs();
   }
   return extracted;
@@ -67,9 +65,10 @@ RgbdSlam::Extracted RgbdSlam::Extract(const cv::Mat& image, const cv::Mat& depth
 TrackResult RgbdSlam::Track(Extracted extracted, bool advance_mapping) {
   const int keypoint_count = extracted.features->size();
   Frame frame(next_frame_id_++, extracted.timestamp, std::move(extracted.features));
-  if (!extracted.moving.empty()) frame.moving = std::move(extracted.moving);
-  frame.moving_known = extracted.moving_known;
-  if (!extracted.proven_static.empty()) frame.proven_static = std::move(extracted.proven_static);
+  MotionVerdicts& motion = extracted.motion;
+  if (!motion.moving.empty()) frame.moving = std::move(motion.moving);
+  frame.moving_known = motion.whole_baseline;
+  frame.proven_static = std::move(motion.proven_static);
   TrackResult result = tracker_.Track(std::move(frame));
   result.stage_ms["extract"] = extracted.extract_ms;
   if (segmenter_ != nullptr) result.stage_ms["moving"] = extracted.moving_ms;

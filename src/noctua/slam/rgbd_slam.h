@@ -36,12 +36,9 @@ class RgbdSlam {
     std::shared_ptr<const FrameFeatures> features;
     double timestamp = 0.0;
     double extract_ms = 0.0;
-    // With SlamOptions::reject_moving_points: the keypoints found moving and those proven static
-    // (MotionSegmenter), one flag per keypoint, whether a whole baseline was seen, and the time
-    // it took.
-    std::vector<bool> moving;
-    std::vector<bool> proven_static;
-    bool moving_known = false;
+    // With SlamOptions::reject_moving_points: what MotionSegmenter found (empty flags without),
+    // and the time it took.
+    MotionVerdicts motion;
     double moving_ms = 0.0;
   };
   Extracted Extract(const cv::Mat& image, const cv::Mat& depth_m, double timestamp);

@@ -202,6 +202,17 @@ void Tracker::ClearTemporaryPoints() {
   temporary_points_.clear();
 }
 
+namespace {
+
+// A point made from keypoint `i` of `frame` starts proven when the segmenter judged the keypoint
+// static (or when no segmenter runs), on probation otherwise (MapPoint::proven).
+void StartProbation(const Frame& frame, int i, MapPoint* point) {
+  point->created_at_s = frame.timestamp;
+  point->proven = frame.proven_static.empty() || frame.proven_static[static_cast<std::size_t>(i)];
+}
+
+}  // namespace
+
 bool Tracker::Initialise(Frame& frame) {
   if (frame.features->CountWithDepth() < options_.min_initial_points) return false;
   frame.pose_cw = geometry::Pose::Identity();
@@ -662,10 +673,12 @@ int Tracker::RejectMovingMatches(bool vote) {
     const std::size_t i = indices[p];
     MapPoint* point = frame.map_points[i];
     const bool in_map = point->num_observations() > 0;
-    if (vote && in_map) point->moving_frames = is_static[p] ? 0 : point->moving_frames + 1;
-    if (vote && in_map && is_static[p] &&
-        frame.timestamp - point->created_at_s >= options_.moving.baseline_s) {
-      point->proven = true;
+    if (vote && in_map) {
+      point->moving_frames = is_static[p] ? 0 : point->moving_frames + 1;
+      // Static a whole baseline after it was made: a mover would have moved by now.
+      const bool proven_now =
+          is_static[p] && frame.timestamp - point->created_at_s >= options_.moving.baseline_s;
+      point->proven = point->proven || proven_now;
     }
     if (is_static[p]) continue;
     frame.map_points[i] = nullptr;
@@ -695,11 +708,6 @@ std::vector<bool> Tracker::MatchesOnProbation() const {
   }
   if (proven < options_.min_tracked_inliers) return {};
   return on_probation;
-}
-
-void Tracker::StartProbation(const Frame& frame, int i, MapPoint* point) {
-  point->created_at_s = frame.timestamp;
-  point->proven = frame.proven_static.empty() || frame.proven_static[static_cast<std::size_t>(i)];
 }
 
 bool Tracker::AsCertainAsRecentFrames() const {

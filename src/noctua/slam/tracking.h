@@ -142,8 +142,6 @@ class Tracker {
   // (SlamOptions::probation_for_new_points); empty when the proven ones are too few to track the
   // frame alone, or probation is off.
   std::vector<bool> MatchesOnProbation() const;
-  // A point made from keypoint `i` of `frame` starts proven when the segmenter judged it static.
-  static void StartProbation(const Frame& frame, int i, MapPoint* point);
   void ClearTemporaryPoints();
   void ReclaimMapPoints();
 
