@@ -24,6 +24,9 @@ RgbdSlam::RgbdSlam(const geometry::PinholeCamera& camera, cv::Ptr<cv::Feature2D>
     segmenter_ = std::make_unique<MotionSegmenter>(
         options_.moving, ScalePyramid(options_.scale_factor, options_.num_levels));
   }
+  if (options_.temporal_denoise.enabled) {
+    denoiser_ = std::make_unique<TemporalDenoiser>(camera_, options_.temporal_denoise);
+  }
 }
 
 TrackResult RgbdSlam::Process(const cv::Mat& image, const cv::Mat& depth_m, double timestamp) {
@@ -43,7 +46,8 @@ RgbdSlam::Extracted RgbdSlam::Extract(const cv::Mat& image, const cv::Mat& depth
   Stopwatch watch;
   std::vector<cv::KeyPoint> keypoints;
   cv::Mat descriptors;
-  extractor_->detectAndCompute(image, cv::noArray(), keypoints, descriptors);
+  const cv::Mat input = denoiser_ ? denoiser_->Denoise(image, depth_m) : image;
+  extractor_->detectAndCompute(input, cv::noArray(), keypoints, descriptors);
   Extracted extracted;
   cv::Mat depth = depth_m;
   if (options_.max_depth_m > 0.0) {

@@ -72,6 +72,9 @@ class RgbdSlam {
   // Finds moving keypoints on the extraction's side, so that it overlaps tracking; it only looks
   // back at earlier frames, in frame order, and touches no tracking state.
   std::unique_ptr<MotionSegmenter> segmenter_;
+  // Averages dark frames along the camera's motion before extraction (on the extraction's side
+  // too: it looks back at earlier frames only, in frame order).
+  std::unique_ptr<TemporalDenoiser> denoiser_;
   long next_frame_id_ = 0;
 };
 

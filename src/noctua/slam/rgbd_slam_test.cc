@@ -16,6 +16,7 @@
 #include "noctua/features/extractor_config.h"
 #include "noctua/io/camera_config.h"
 #include "noctua/pipeline/method.h"
+#include "noctua/sim/low_light.h"
 #include "noctua/sim/sequence.h"
 #include "noctua/slam/map.h"
 #include "noctua/slam/map_io.h"
@@ -592,6 +593,9 @@ TEST_F(RgbdSlamTest, BadConfigAndBadDataFailClearly) {
   EXPECT_TRUE(defaults.probation_for_new_points);
   EXPECT_FALSE(LoadSlamSetup(write(camera + "slam:\n  probation_for_new_points: false\n"))
                    .options.probation_for_new_points);
+  EXPECT_FALSE(defaults.temporal_denoise.enabled);  // the `noctua` method turns it on
+  EXPECT_TRUE(LoadSlamSetup(write(camera + "slam:\n  temporal_denoise: true\n"))
+                  .options.temporal_denoise.enabled);
   EXPECT_THAT(error_of([&] {
                 LoadSlamSetup(write(camera + "slam:\n  motion_prior_outlier_sigmas: -1\n"));
               }),
@@ -746,6 +750,37 @@ TEST(RgbdSlamSimulatedPerson, ModelFreeRejectionRemovesThePersonsPoints) {
             << " on the person)\n";
   EXPECT_GT(precision, 0.2);
   EXPECT_GT(recall, 0.5);
+}
+
+// The first 60 frames of fr1/rpy darkened to 15 % by the `kinect` sensor model (fresh noise every
+// frame), tracked by `noctua`'s extractor with and without the dark frames averaged along the
+// camera's motion (SlamOptions::temporal_denoise). Measured: 0.0140 m with, 0.0155 m without,
+// every frame tracked. Bounds: 0.03 m, and no worse than without beyond the 10 % that a change
+// of build flags can move one run by.
+TEST_F(RgbdSlamTest, DarkFramesAveragedAlongTheMotionTrackAsWellOrBetter) {
+  const sim::LowLightSimulator dark(sim::SensorModelByName("kinect"), 0.15);
+  pipeline::MethodConfig config;
+  config.extractor = features::LoadExtractorOptions(kConfigDir / "tum_fr1.yaml");
+  const auto ate_of = [&](bool averaged) {
+    SlamOptions options = setup_->options;
+    options.temporal_denoise.enabled = averaged;
+    RgbdSlam slam(setup_->camera.Camera(), pipeline::CreateMethod("noctua", config)->feature2d(),
+                  options);
+    RunOptions run_options;
+    run_options.max_frames = 60;
+    run_options.transform_image = [&dark](int index, const cv::Mat& bgr) {
+      cv::RNG rng(static_cast<std::uint64_t>(index) + 1);
+      return dark.Apply(bgr, rng);
+    };
+    const SequenceRun run = RunSequence(slam, *sequence_, setup_->camera.depth_factor, run_options);
+    EXPECT_EQ(run.trajectory.size(), 60u) << (averaged ? "averaged" : "single frames");
+    return eval::ComputeAte(sequence_->ground_truth(), run.trajectory).translation_m.rmse;
+  };
+  const double with = ate_of(true);
+  const double without = ate_of(false);
+  std::cerr << "ATE averaged " << with << " m, single frames " << without << " m\n";
+  EXPECT_LT(with, 0.03);
+  EXPECT_LE(with, 1.1 * without);
 }
 
 }  // namespace

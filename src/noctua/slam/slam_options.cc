@@ -58,6 +58,7 @@ void SlamOptions::Check() const {
   CheckOption(keyframe_pause_after_relocalisation >= 0,
               "slam: keyframe_pause_after_relocalisation must not be negative");
   CheckOption(relocalisation_candidates >= 1, "slam: relocalisation_candidates must be >= 1");
+  temporal_denoise.Check();
   CheckOption(local_ba_iterations >= 1, "slam: local_ba_iterations must be >= 1");
   CheckOption(local_ba_max_covisibles >= 0, "slam: local_ba_max_covisibles must be >= 0");
   CheckOption(mapping_slice_ms >= 0.0, "slam: mapping_slice_ms must not be negative");
@@ -102,7 +103,8 @@ void ReadSlamSection(const YAML::Node& root, const std::string& source, SlamOpti
                                                "motion_prior_outlier_sigmas",
                                                "loop_closing",
                                                "loop_min_inliers",
-                                               "probation_for_new_points"};
+                                               "probation_for_new_points",
+                                               "temporal_denoise"};
   for (const auto& entry : section) {
     const auto key = entry.first.as<std::string>();
     if (!kKnown.contains(key)) {
@@ -119,6 +121,7 @@ void ReadSlamSection(const YAML::Node& root, const std::string& source, SlamOpti
   io::ReadSetting(section, "loop_closing", source, options.loop_closing.enabled);
   io::ReadSetting(section, "loop_min_inliers", source, options.loop_closing.min_loop_inliers);
   io::ReadSetting(section, "probation_for_new_points", source, options.probation_for_new_points);
+  io::ReadSetting(section, "temporal_denoise", source, options.temporal_denoise.enabled);
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 #include "noctua/io/camera_config.h"
 #include "noctua/place/vocabulary.h"
 #include "noctua/slam/moving_points.h"
+#include "noctua/slam/temporal_denoise.h"
 
 namespace noctua::slam {
 
@@ -197,6 +198,9 @@ struct SlamOptions {
   // world over a whole baseline after it was made. On bonn_crowd_120 (orb, no detector, five
   // brightness scales) the ATE falls from 0.059 to 0.028 m (docs/dynamic.md).
   bool probation_for_new_points = true;
+  // Dark frames averaged with the aligned frames before them before extraction
+  // (temporal_denoise.h); `slam: temporal_denoise`.
+  TemporalDenoiseOptions temporal_denoise;
 
   // Throws noctua::Error naming the first invalid field.
   void Check() const;
