@@ -182,10 +182,6 @@ slam::SlamSetup CheckedSetup(const SlamRunOptions& options) {
   setup.options.background_bundle_adjustment = !options.deterministic;
   if (!options.deterministic) setup.options.mapping_slice_ms = options.mapping_slice_ms;
   if (!options.vocabulary.empty()) setup.options.vocabulary = options.vocabulary;
-  // `noctua`, the project's low-light method, also averages dark frames along the camera's
-  // motion where it has a sequence (slam/temporal_denoise.h); `slam: temporal_denoise` turns
-  // that on for the other methods.
-  if (options.method == "noctua") setup.options.temporal_denoise.enabled = true;
   return setup;
 }
 

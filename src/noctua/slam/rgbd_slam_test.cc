@@ -593,7 +593,7 @@ TEST_F(RgbdSlamTest, BadConfigAndBadDataFailClearly) {
   EXPECT_TRUE(defaults.probation_for_new_points);
   EXPECT_FALSE(LoadSlamSetup(write(camera + "slam:\n  probation_for_new_points: false\n"))
                    .options.probation_for_new_points);
-  EXPECT_FALSE(defaults.temporal_denoise.enabled);  // the `noctua` method turns it on
+  EXPECT_FALSE(defaults.temporal_denoise.enabled);
   EXPECT_TRUE(LoadSlamSetup(write(camera + "slam:\n  temporal_denoise: true\n"))
                   .options.temporal_denoise.enabled);
   EXPECT_THAT(error_of([&] {

@@ -199,7 +199,7 @@ struct SlamOptions {
   // brightness scales) the ATE falls from 0.059 to 0.028 m (docs/dynamic.md).
   bool probation_for_new_points = true;
   // Dark frames averaged with the aligned frames before them before extraction
-  // (temporal_denoise.h); `slam: temporal_denoise`.
+  // (temporal_denoise.h, off by default); `slam: temporal_denoise`.
   TemporalDenoiseOptions temporal_denoise;
 
   // Throws noctua::Error naming the first invalid field.

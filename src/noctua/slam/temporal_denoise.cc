@@ -30,33 +30,11 @@ cv::Mat HalfSizeDepth(const cv::Mat& depth_m) {
   return half;
 }
 
-// For every pixel of this frame, where it was in the previous one: through its depth where it has
-// one, as a point at infinity (the rotation alone) where it has none.
-void WarpMaps(const geometry::PinholeCamera& camera, const cv::Matx44d& motion,
-              const cv::Mat& depth_m, cv::Mat& map_x, cv::Mat& map_y) {
-  map_x.create(depth_m.size(), CV_32FC1);
-  map_y.create(depth_m.size(), CV_32FC1);
-  const double fx = camera.fx(), fy = camera.fy(), cx = camera.cx(), cy = camera.cy();
-  const cv::Matx33d r(motion(0, 0), motion(0, 1), motion(0, 2), motion(1, 0), motion(1, 1),
-                      motion(1, 2), motion(2, 0), motion(2, 1), motion(2, 2));
-  const cv::Vec3d t(motion(0, 3), motion(1, 3), motion(2, 3));
-  for (int v = 0; v < depth_m.rows; ++v) {
-    const float* depth = depth_m.ptr<float>(v);
-    float* mx = map_x.ptr<float>(v);
-    float* my = map_y.ptr<float>(v);
-    const double y = (v - cy) / fy;
-    for (int u = 0; u < depth_m.cols; ++u) {
-      const cv::Vec3d ray((u - cx) / fx, y, 1.0);
-      const double z = depth[u];
-      const cv::Vec3d p = z > 0.0 ? r * (ray * z) + t : r * ray;
-      if (p[2] <= 1e-6) {
-        mx[u] = my[u] = -1.0f;  // behind the previous camera: no history
-        continue;
-      }
-      mx[u] = static_cast<float>(fx * p[0] / p[2] + cx);
-      my[u] = static_cast<float>(fy * p[1] / p[2] + cy);
-    }
-  }
+// The homography that takes a pixel of this frame to where it was in the previous one when the
+// camera turned by `rotation` (p_previous = R p_this): K R K^-1, the same at every depth.
+cv::Matx33d RotationHomography(const geometry::PinholeCamera& camera, const cv::Mat& rotation) {
+  const cv::Matx33d k(camera.fx(), 0.0, camera.cx(), 0.0, camera.fy(), camera.cy(), 0.0, 0.0, 1.0);
+  return k * cv::Matx33d(rotation(cv::Rect(0, 0, 3, 3))) * k.inv();
 }
 
 }  // namespace
@@ -69,6 +47,7 @@ TemporalDenoiser::TemporalDenoiser(const geometry::PinholeCamera& camera,
   k_half.convertTo(k_half, CV_64F);
   k_half.rowRange(0, 2) *= 0.5;
   odometry_ = cv::rgbd::RgbdOdometry::create(k_half);
+  odometry_->setTransformType(cv::rgbd::Odometry::ROTATION);
 }
 
 void TemporalDenoiser::Reset() {
@@ -115,10 +94,15 @@ cv::Mat TemporalDenoiser::Denoise(const cv::Mat& image, const cv::Mat& depth_m) 
     return gray;
   }
 
-  cv::Mat map_x, map_y, history, frames;
-  WarpMaps(camera_, cv::Matx44d(motion), depth_m, map_x, map_y);
-  cv::remap(history_, history, map_x, map_y, cv::INTER_LINEAR, cv::BORDER_CONSTANT, 0.0);
-  cv::remap(frames_, frames, map_x, map_y, cv::INTER_NEAREST, cv::BORDER_CONSTANT, 0.0);
+  // The history is resampled where each pixel was a frame ago (WARP_INVERSE_MAP: the homography
+  // maps this frame's pixels into the previous frame).
+  const cv::Matx33d homography = RotationHomography(camera_, motion);
+  const int warp = cv::WARP_INVERSE_MAP;
+  cv::Mat history, frames;
+  cv::warpPerspective(history_, history, homography, current.size(), cv::INTER_LINEAR | warp,
+                      cv::BORDER_CONSTANT, 0.0);
+  cv::warpPerspective(frames_, frames, homography, current.size(), cv::INTER_NEAREST | warp,
+                      cv::BORDER_CONSTANT, 0.0);
   cv::Mat difference = current - history;
   cv::blur(difference, difference, cv::Size(3, 3));
 
