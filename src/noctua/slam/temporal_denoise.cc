@@ -37,6 +37,42 @@ cv::Matx33d RotationHomography(const geometry::PinholeCamera& camera, const cv::
   return k * cv::Matx33d(rotation(cv::Rect(0, 0, 3, 3))) * k.inv();
 }
 
+struct FusionCounts {
+  long kept = 0;           // pixels that kept their history
+  double frame_sum = 0.0;  // of the frames in each pixel's average
+};
+
+// Folds `current` (CV_32F) into its warped `history` where the 3x3 mean `difference` is within
+// what the noise explains: the frame's σ² and the history's σ² / n over 9 pixels. `frames` holds
+// each pixel's count of averaged frames (0: no history) and is updated with `current`.
+FusionCounts FuseWithHistory(const cv::Mat& history, const cv::Mat& difference, double noise_sigma,
+                             const TemporalDenoiseOptions& options, cv::Mat& current,
+                             cv::Mat& frames) {
+  const double gate = options.gate_sigmas * std::max(noise_sigma, 0.5) / 3.0;
+  const float max_frames = static_cast<float>(options.max_frames);
+  FusionCounts counts;
+  for (int v = 0; v < current.rows; ++v) {
+    float* out = current.ptr<float>(v);
+    float* n = frames.ptr<float>(v);
+    const float* h = history.ptr<float>(v);
+    const float* d = difference.ptr<float>(v);
+    for (int u = 0; u < current.cols; ++u) {
+      const float held = n[u];
+      const double limit = gate * std::sqrt(1.0 + 1.0 / std::max(held, 1.0f));
+      if (held >= 1.0f && std::abs(d[u]) <= limit) {
+        const float weight = std::min(held, max_frames - 1.0f);
+        out[u] = (out[u] + weight * h[u]) / (weight + 1.0f);
+        n[u] = weight + 1.0f;
+        ++counts.kept;
+      } else {
+        n[u] = 1.0f;
+      }
+      counts.frame_sum += n[u];
+    }
+  }
+  return counts;
+}
+
 }  // namespace
 
 TemporalDenoiser::TemporalDenoiser(const geometry::PinholeCamera& camera,
@@ -55,20 +91,33 @@ void TemporalDenoiser::Reset() {
   frames_.release();
   previous_half_.release();
   previous_depth_half_.release();
-  last_motion_.release();
+  last_rotation_.release();
 }
 
-cv::Mat TemporalDenoiser::AlignToPrevious(const cv::Mat& lifted_half, const cv::Mat& depth_half) {
-  cv::Mat motion;
-  const cv::Mat no_mask;
-  const bool found = odometry_->compute(lifted_half, depth_half, no_mask, previous_half_,
-                                        previous_depth_half_, no_mask, motion, last_motion_);
-  if (!found) return {};
-  return motion;
+cv::Mat TemporalDenoiser::AlignToPrevious(const cv::Mat& gray, double mean_grey,
+                                          const cv::Mat& depth_m) {
+  cv::Mat lifted_half;
+  cv::pyrDown(gray, lifted_half);
+  lifted_half.convertTo(lifted_half, CV_8U, kOdometryMeanGrey / mean_grey);
+  const cv::Mat depth_half = HalfSizeDepth(depth_m);
+  cv::Mat rotation;
+  if (!previous_half_.empty()) {
+    const cv::Mat no_mask;
+    const bool found = odometry_->compute(lifted_half, depth_half, no_mask, previous_half_,
+                                          previous_depth_half_, no_mask, rotation, last_rotation_);
+    if (!found) rotation.release();
+  }
+  previous_half_ = lifted_half;
+  previous_depth_half_ = depth_half;
+  last_rotation_ = rotation;
+  return rotation;
 }
 
 cv::Mat TemporalDenoiser::Denoise(const cv::Mat& image, const cv::Mat& depth_m) {
   stats_ = {};
+  if (depth_m.size() != image.size() || depth_m.type() != CV_32FC1) {
+    throw Error("temporal_denoise: depth must be CV_32F metres of the image's size");
+  }
   const cv::Mat gray = image::ToGray8U(image);
   const double mean_grey = cv::mean(gray)[0];
   if (mean_grey >= options_.dark_mean_grey || mean_grey <= 0.0) {
@@ -76,19 +125,10 @@ cv::Mat TemporalDenoiser::Denoise(const cv::Mat& image, const cv::Mat& depth_m) 
     return gray;
   }
   stats_.noise_sigma = image::EstimateNoiseSigmaAcrossScales(gray);
-  cv::Mat lifted_half;
-  cv::pyrDown(gray, lifted_half);
-  lifted_half.convertTo(lifted_half, CV_8U, kOdometryMeanGrey / mean_grey);
-  const cv::Mat depth_half = HalfSizeDepth(depth_m);
-
+  const cv::Mat rotation = AlignToPrevious(gray, mean_grey, depth_m);
   cv::Mat current;
   gray.convertTo(current, CV_32F);
-  cv::Mat motion;
-  if (!previous_half_.empty()) motion = AlignToPrevious(lifted_half, depth_half);
-  previous_half_ = lifted_half;
-  previous_depth_half_ = depth_half;
-  last_motion_ = motion;
-  if (motion.empty() || history_.empty()) {
+  if (rotation.empty() || history_.empty()) {
     history_ = current;
     frames_ = cv::Mat::ones(current.size(), CV_32F);
     return gray;
@@ -96,7 +136,7 @@ cv::Mat TemporalDenoiser::Denoise(const cv::Mat& image, const cv::Mat& depth_m) 
 
   // The history is resampled where each pixel was a frame ago (WARP_INVERSE_MAP: the homography
   // maps this frame's pixels into the previous frame).
-  const cv::Matx33d homography = RotationHomography(camera_, motion);
+  const cv::Matx33d homography = RotationHomography(camera_, rotation);
   const int warp = cv::WARP_INVERSE_MAP;
   cv::Mat history, frames;
   cv::warpPerspective(history_, history, homography, current.size(), cv::INTER_LINEAR | warp,
@@ -106,38 +146,14 @@ cv::Mat TemporalDenoiser::Denoise(const cv::Mat& image, const cv::Mat& depth_m) 
   cv::Mat difference = current - history;
   cv::blur(difference, difference, cv::Size(3, 3));
 
-  // A 3x3 mean of differences of independent noise: the frame's σ² and the history's σ² / n
-  // over 9 pixels.
-  const double sigma = std::max(stats_.noise_sigma, 0.5);
-  const double gate = options_.gate_sigmas * sigma / 3.0;
-  const float max_frames = static_cast<float>(options_.max_frames);
-  long kept = 0;
-  double frame_sum = 0.0;
-  for (int v = 0; v < current.rows; ++v) {
-    float* out = current.ptr<float>(v);
-    float* n = frames.ptr<float>(v);
-    const float* h = history.ptr<float>(v);
-    const float* d = difference.ptr<float>(v);
-    for (int u = 0; u < current.cols; ++u) {
-      const float held = n[u];
-      const double limit = gate * std::sqrt(1.0 + 1.0 / std::max(held, 1.0f));
-      if (held >= 1.0f && std::abs(d[u]) <= limit) {
-        const float weight = std::min(held, max_frames - 1.0f);
-        out[u] = (out[u] + weight * h[u]) / (weight + 1.0f);
-        n[u] = weight + 1.0f;
-        ++kept;
-      } else {
-        n[u] = 1.0f;
-      }
-      frame_sum += n[u];
-    }
-  }
+  const FusionCounts counts =
+      FuseWithHistory(history, difference, stats_.noise_sigma, options_, current, frames);
   history_ = current;
   frames_ = frames;
   const double pixels = static_cast<double>(current.total());
   stats_.applied = true;
-  stats_.history_share = kept / pixels;
-  stats_.mean_frames = frame_sum / pixels;
+  stats_.history_share = static_cast<double>(counts.kept) / pixels;
+  stats_.mean_frames = counts.frame_sum / pixels;
   cv::Mat denoised;
   current.convertTo(denoised, CV_8U);
   return denoised;

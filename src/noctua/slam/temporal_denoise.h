@@ -53,14 +53,15 @@ class TemporalDenoiser {
   // Returns the grey frame (8-bit) to extract features from: for a dark frame, the running
   // average of the aligned frames before it and this one; otherwise the frame as grey, and the
   // history starts again. `depth_m` (CV_32F metres registered to `image`, 0 = no reading) is for
-  // the odometry.
+  // the odometry. Throws noctua::Error for depth of another size or type.
   cv::Mat Denoise(const cv::Mat& image, const cv::Mat& depth_m);
   const TemporalDenoiseStats& stats() const { return stats_; }
 
  private:
   // Rotation from this frame to the previous one (4x4 CV_64F, p_previous = T * p_this, no
-  // translation), or empty when the odometry fails.
-  cv::Mat AlignToPrevious(const cv::Mat& lifted_half, const cv::Mat& depth_half);
+  // translation), or empty when there is no previous frame or the odometry fails; keeps this
+  // frame as the next one's previous.
+  cv::Mat AlignToPrevious(const cv::Mat& gray, double mean_grey, const cv::Mat& depth_m);
   void Reset();
 
   geometry::PinholeCamera camera_;
@@ -70,7 +71,7 @@ class TemporalDenoiser {
   cv::Mat frames_;         // CV_32F frames in each pixel's average
   cv::Mat previous_half_;  // previous frame for the odometry: lifted grey and depth, half size
   cv::Mat previous_depth_half_;
-  cv::Mat last_motion_;  // the odometry's last answer, the next one's starting point
+  cv::Mat last_rotation_;  // the odometry's last answer, the next one's starting point
   TemporalDenoiseStats stats_;
 };
 

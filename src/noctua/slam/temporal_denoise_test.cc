@@ -123,6 +123,15 @@ TEST(TemporalDenoiser, LeavesWellExposedFramesAsTheyAre) {
   }
 }
 
+TEST(TemporalDenoiser, RefusesDepthThatDoesNotFitTheFrame) {
+  TemporalDenoiser denoiser(testing::TestCamera(), {.enabled = true});
+  cv::Mat frame;
+  DarkScene(0.0).convertTo(frame, CV_8U);
+  EXPECT_THROW(denoiser.Denoise(frame, cv::Mat(240, 320, CV_32F, cv::Scalar(1.0))), Error);
+  EXPECT_THROW(denoiser.Denoise(frame, cv::Mat(480, 640, CV_16U, cv::Scalar(5000))), Error);
+  EXPECT_NO_THROW(denoiser.Denoise(frame, DepthRamp()));
+}
+
 TEST(TemporalDenoiser, RefusesInvalidOptions) {
   EXPECT_THROW(TemporalDenoiser(testing::TestCamera(), {.enabled = true, .max_frames = 0}), Error);
   EXPECT_THROW(TemporalDenoiser(testing::TestCamera(), {.enabled = true, .gate_sigmas = 0.0}),
