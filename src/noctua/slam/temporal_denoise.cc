@@ -33,7 +33,7 @@ cv::Mat HalfSizeDepth(const cv::Mat& depth_m) {
 // The homography that takes a pixel of this frame to where it was in the previous one when the
 // camera turned by `rotation` (p_previous = R p_this): K R K^-1, the same at every depth.
 cv::Matx33d RotationHomography(const geometry::PinholeCamera& camera, const cv::Mat& rotation) {
-  const cv::Matx33d k(camera.fx(), 0.0, camera.cx(), 0.0, camera.fy(), camera.cy(), 0.0, 0.0, 1.0);
+  const cv::Matx33d k = camera.K();
   return k * cv::Matx33d(rotation(cv::Rect(0, 0, 3, 3))) * k.inv();
 }
 
@@ -79,8 +79,7 @@ TemporalDenoiser::TemporalDenoiser(const geometry::PinholeCamera& camera,
                                    const TemporalDenoiseOptions& options)
     : camera_(camera), options_(options) {
   options_.Check();
-  cv::Mat k_half = camera_.K().clone();
-  k_half.convertTo(k_half, CV_64F);
+  cv::Mat k_half = camera_.K();  // a fresh CV_64F matrix
   k_half.rowRange(0, 2) *= 0.5;
   odometry_ = cv::rgbd::RgbdOdometry::create(k_half);
   odometry_->setTransformType(cv::rgbd::Odometry::ROTATION);
@@ -122,7 +121,7 @@ cv::Mat TemporalDenoiser::Denoise(const cv::Mat& image, const cv::Mat& depth_m) 
   const double mean_grey = cv::mean(gray)[0];
   if (mean_grey >= options_.dark_mean_grey || mean_grey <= 0.0) {
     Reset();
-    return gray;
+    return image;  // as it came, colour included (a detector in line sees it)
   }
   stats_.noise_sigma = image::EstimateNoiseSigmaAcrossScales(gray);
   const cv::Mat rotation = AlignToPrevious(gray, mean_grey, depth_m);

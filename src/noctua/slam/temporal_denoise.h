@@ -50,8 +50,8 @@ class TemporalDenoiser {
  public:
   TemporalDenoiser(const geometry::PinholeCamera& camera, const TemporalDenoiseOptions& options);
 
-  // Returns the grey frame (8-bit) to extract features from: for a dark frame, the running
-  // average of the aligned frames before it and this one; otherwise the frame as grey, and the
+  // Returns the frame to extract features from: for a dark frame, the grey (8-bit) running
+  // average of the aligned frames before it and this one; otherwise the frame as it is, and the
   // history starts again. `depth_m` (CV_32F metres registered to `image`, 0 = no reading) is for
   // the odometry. Throws noctua::Error for depth of another size or type.
   cv::Mat Denoise(const cv::Mat& image, const cv::Mat& depth_m);
