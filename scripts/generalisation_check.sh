@@ -14,7 +14,8 @@
 # config/tum_fr1.yaml and config/bonn.yaml, which the baseline uses; BASELINE_ARGS adds flags to
 # the baseline). Writes OUT/runs.csv (one line per run) and OUT/check.md (per method and set: mean ATE
 # RMSE (min–max), worst / best, frames lost, and the candidate's mean against the baseline's).
-# Runs already in OUT are kept. About 6 min for three methods on 2 cores.
+# Runs already in OUT are kept (an OUT made with other settings is refused). About 6 min for
+# three methods on 2 cores.
 # Usage: CANDIDATE_ARGS="..." scripts/generalisation_check.sh [OUT (default generalisation)]
 # NOCTUA_METHODS (default "orb clahe-orb paper"), NOCTUA_JOBS (default 2) override.
 set -euo pipefail
@@ -43,9 +44,14 @@ for file in "$noctua" "$fr1/associations.txt" "$crowd/rgb.txt" "$detector" \
 done
 command -v jq >/dev/null || { echo "generalisation_check: needs jq (apt-get install jq)" >&2; exit 1; }
 mkdir -p "$out/runs"
-printf 'baseline: %s %s %s\ncandidate: %s %s %s\n' "${BASELINE_ARGS:-}" "$fr1_config" \
-  "$bonn_config" "${CANDIDATE_ARGS:-}" "$CANDIDATE_FR1_CONFIG" "$CANDIDATE_BONN_CONFIG" \
-  >"$out/settings.txt"
+# Runs already in OUT are kept, so they must have been made with these settings.
+settings=$(printf 'baseline: %s %s %s\ncandidate: %s %s %s' "${BASELINE_ARGS:-}" "$fr1_config" \
+  "$bonn_config" "${CANDIDATE_ARGS:-}" "$CANDIDATE_FR1_CONFIG" "$CANDIDATE_BONN_CONFIG")
+if [ -e "$out/settings.txt" ] && [ "$(cat "$out/settings.txt")" != "$settings" ]; then
+  echo "generalisation_check: $out/settings.txt: OUT holds runs of other settings; use another OUT" >&2
+  exit 1
+fi
+echo "$settings" >"$out/settings.txt"
 
 sets="fr1 fr1-held crowd"
 [ "${MODEL_FREE:-0}" = 1 ] && sets="$sets crowd-free"
