@@ -59,7 +59,8 @@ class Slam {
   double depth_factor() const { return setup_.camera.depth_factor; }
 
  private:
-  // T_world_camera of the frame just tracked (coasting included), as the trajectory has it.
+  // T_world_camera of the frame just tracked (a coasted frame: the prediction, which the finished
+  // trajectory may bridge).
   std::optional<geometry::Pose> CurrentPose() const {
     const auto& records = slam_->tracker().records();
     if (records.empty() || records.back().reference == nullptr) return std::nullopt;

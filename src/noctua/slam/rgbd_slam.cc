@@ -10,6 +10,7 @@
 #include <optional>
 #include <thread>
 
+#include "noctua/geometry/se3.h"
 #include "noctua/util/error.h"
 #include "noctua/util/timer.h"
 
@@ -81,13 +82,52 @@ TrackResult RgbdSlam::Track(Extracted extracted, bool advance_mapping) {
   return result;
 }
 
+namespace {
+
+// Each run of coasted frames right after a tracked frame gets the poses interpolated in time
+// between that frame and the next tracked one, lost frames between left without a pose
+// (SlamOptions::bridge_coasted_frames). poses_wc holds one entry per record, none where a record
+// has no pose.
+void BridgeCoastedFrames(const std::vector<FrameRecord>& records,
+                         std::vector<std::optional<geometry::Pose>>& poses_wc) {
+  const auto tracked = [&records](std::size_t i) {
+    return records[i].reference != nullptr && !records[i].coasted;
+  };
+  for (std::size_t first = 1; first < records.size(); ++first) {
+    if (!records[first].coasted || !tracked(first - 1)) continue;
+    std::size_t end = first;
+    while (end < records.size() && records[end].coasted) ++end;
+    std::size_t next = end;
+    while (next < records.size() && records[next].reference == nullptr) ++next;
+    if (next < records.size() && tracked(next)) {
+      const double t0 = records[first - 1].timestamp;
+      const double span = records[next].timestamp - t0;
+      for (std::size_t k = first; k < end; ++k) {
+        // Frames without distinct timestamps are spaced evenly.
+        const double alpha =
+            span > 0.0 ? (records[k].timestamp - t0) / span
+                       : static_cast<double>(k - first + 1) / static_cast<double>(next - first + 1);
+        poses_wc[k] = geometry::Interpolate(*poses_wc[first - 1], *poses_wc[next], alpha);
+      }
+    }
+    first = end;
+  }
+}
+
+}  // namespace
+
 io::Trajectory RgbdSlam::Trajectory() {
   FinishMapping();
+  const std::vector<FrameRecord>& records = tracker_.records();
+  std::vector<std::optional<geometry::Pose>> poses_wc(records.size());
+  for (std::size_t i = 0; i < records.size(); ++i) {
+    if (records[i].reference == nullptr) continue;
+    poses_wc[i] = (records[i].pose_c_r * records[i].reference->pose_cw()).inverse();
+  }
+  if (options_.bridge_coasted_frames) BridgeCoastedFrames(records, poses_wc);
   std::vector<io::StampedPose> poses;
-  for (const FrameRecord& record : tracker_.records()) {
-    if (record.reference == nullptr) continue;
-    const geometry::Pose pose_cw = record.pose_c_r * record.reference->pose_cw();
-    poses.push_back({record.timestamp, pose_cw.inverse()});
+  for (std::size_t i = 0; i < records.size(); ++i) {
+    if (poses_wc[i]) poses.push_back({records[i].timestamp, *poses_wc[i]});
   }
   return io::Trajectory(std::move(poses));
 }

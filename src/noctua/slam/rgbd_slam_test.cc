@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -15,6 +16,7 @@
 
 #include "noctua/eval/trajectory_error.h"
 #include "noctua/features/extractor_config.h"
+#include "noctua/geometry/se3.h"
 #include "noctua/io/camera_config.h"
 #include "noctua/pipeline/method.h"
 #include "noctua/sim/low_light.h"
@@ -409,12 +411,84 @@ TEST_F(RgbdSlamTest, RecoversAfterTwentyBlackFrames) {
   for (int i = 60; i < 90; ++i)
     EXPECT_EQ(run.frames[static_cast<std::size_t>(i)].state, TrackingState::kOk) << i;
   EXPECT_EQ(run.frames[60].method, "relocalisation");
-  EXPECT_EQ(run.trajectory.size(), 80u);
+  ASSERT_EQ(run.trajectory.size(), 80u);
+  // In the finished trajectory the coasted frames lie between frames 39 and 60, by time (the
+  // trajectory holds frames 0-49 and 60-89).
+  const io::StampedPose& before = run.trajectory.poses()[39];
+  const io::StampedPose& after = run.trajectory.poses()[50];
+  ASSERT_EQ(after.timestamp, run.frames[60].timestamp);
+  for (std::size_t i = 40; i < 50; ++i) {
+    const io::StampedPose& bridged = run.trajectory.poses()[i];
+    const double alpha =
+        (bridged.timestamp - before.timestamp) / (after.timestamp - before.timestamp);
+    EXPECT_TRUE(bridged.pose.matrix().isApprox(
+        geometry::Interpolate(before.pose, after.pose, alpha).matrix(), 1e-12))
+        << i;
+  }
   // A tracked frame is surer than any coasted one.
   EXPECT_LT(run.frames[39].position_sigma_m, run.frames[40].position_sigma_m);
   EXPECT_LT(run.frames[70].position_sigma_m, 0.02);
   const eval::AteResult ate = eval::ComputeAte(sequence_->ground_truth(), run.trajectory);
   EXPECT_LT(ate.translation_m.rmse, 0.09);
+}
+
+// Eight black frames: they coast on the motion model; once frame 48 is tracked again the
+// finished trajectory bridges them, each pose interpolated in time between frames 39 and 48,
+// which both ends measured; the prediction (bridge_coasted_frames off) is further from the
+// ground truth. Tracking itself is the same either way.
+TEST_F(RgbdSlamTest, BridgesCoastedFramesBetweenTheTrackedFramesAroundThem) {
+  const auto black = [](int index, const cv::Mat& image) {
+    return index >= 40 && index < 48 ? cv::Mat(image.size(), image.type(), cv::Scalar::all(0))
+                                     : image;
+  };
+  std::vector<SequenceRun> runs;
+  for (const bool bridge : {false, true}) {
+    SlamOptions options = setup_->options;
+    options.bridge_coasted_frames = bridge;
+    RunOptions run_options;
+    run_options.max_frames = 70;
+    run_options.transform_image = black;
+    runs.push_back(RunSequence(*sequence_, setup_->camera.depth_factor, setup_->camera.Camera(),
+                               Orb(*setup_), options, run_options));
+  }
+  const SequenceRun& predicted = runs[0];
+  const SequenceRun& bridged = runs[1];
+  ASSERT_EQ(bridged.coasted_frames, (std::vector<int>{40, 41, 42, 43, 44, 45, 46, 47}));
+  ASSERT_EQ(predicted.coasted_frames, bridged.coasted_frames);
+  ASSERT_TRUE(bridged.lost_frames.empty());
+  ASSERT_EQ(bridged.frames[48].state, TrackingState::kOk);
+  ASSERT_EQ(bridged.trajectory.size(), 70u);
+  ASSERT_EQ(predicted.trajectory.size(), 70u);
+  const auto pose = [](const SequenceRun& run, int index) {
+    return run.trajectory.poses()[static_cast<std::size_t>(index)];
+  };
+  const io::StampedPose before = pose(bridged, 39);
+  const io::StampedPose after = pose(bridged, 48);
+  for (int i = 0; i < 70; ++i) {
+    SCOPED_TRACE(i);
+    const io::StampedPose got = pose(bridged, i);
+    if (i < 40 || i >= 48) {
+      EXPECT_TRUE(got.pose.matrix().isApprox(pose(predicted, i).pose.matrix(), 1e-12));
+      continue;
+    }
+    const double alpha = (got.timestamp - before.timestamp) / (after.timestamp - before.timestamp);
+    const geometry::Pose expected = geometry::Interpolate(before.pose, after.pose, alpha);
+    EXPECT_TRUE(got.pose.matrix().isApprox(expected.matrix(), 1e-12));
+    EXPECT_FALSE(got.pose.matrix().isApprox(pose(predicted, i).pose.matrix(), 1e-6));
+  }
+  // Judged on the coasted frames alone, each trajectory aligned to the ground truth as a whole.
+  const auto coasted_rms = [this](const SequenceRun& run) {
+    const eval::AteResult ate = eval::ComputeAte(sequence_->ground_truth(), run.trajectory);
+    EXPECT_EQ(ate.errors_m.size(), 70u);  // every frame associates: index = frame
+    double sum = 0.0;
+    for (std::size_t i = 40; i < 48; ++i) sum += ate.errors_m[i] * ate.errors_m[i];
+    return std::sqrt(sum / 8.0);
+  };
+  const double predicted_rms = coasted_rms(predicted);
+  const double bridged_rms = coasted_rms(bridged);
+  RecordProperty("coasted_rms_predicted_mm", std::to_string(predicted_rms * 1000.0));
+  RecordProperty("coasted_rms_bridged_mm", std::to_string(bridged_rms * 1000.0));
+  EXPECT_LT(bridged_rms, predicted_rms);
 }
 
 // After the black stretch the map grows again at once by default; with ORB-SLAM's pause no
@@ -597,6 +671,16 @@ TEST_F(RgbdSlamTest, BadConfigAndBadDataFailClearly) {
   EXPECT_FALSE(defaults.temporal_denoise.enabled);
   EXPECT_TRUE(LoadSlamSetup(write(camera + "slam:\n  temporal_denoise: true\n"))
                   .options.temporal_denoise.enabled);
+  EXPECT_TRUE(defaults.bridge_coasted_frames);
+  const SlamOptions coasting =
+      LoadSlamSetup(
+          write(camera + "slam:\n  max_coasting_frames: 4\n  bridge_coasted_frames: false\n"))
+          .options;
+  EXPECT_EQ(coasting.max_coasting_frames, 4);
+  EXPECT_FALSE(coasting.bridge_coasted_frames);
+  EXPECT_THAT(
+      error_of([&] { LoadSlamSetup(write(camera + "slam:\n  max_coasting_frames: -1\n")); }),
+      HasSubstr("max_coasting_frames must not be negative"));
   EXPECT_THAT(error_of([&] {
                 LoadSlamSetup(write(camera + "slam:\n  motion_prior_outlier_sigmas: -1\n"));
               }),

@@ -99,6 +99,8 @@ void ReadSlamSection(const YAML::Node& root, const std::string& source, SlamOpti
   static const std::set<std::string> kKnown = {"triangulate",
                                                "triangulation_covisibles",
                                                "max_depth_m",
+                                               "max_coasting_frames",
+                                               "bridge_coasted_frames",
                                                "motion_prior_acceleration_mps2",
                                                "motion_prior_outlier_sigmas",
                                                "loop_closing",
@@ -114,6 +116,8 @@ void ReadSlamSection(const YAML::Node& root, const std::string& source, SlamOpti
   io::ReadSetting(section, "triangulate", source, options.triangulation.enabled);
   io::ReadSetting(section, "triangulation_covisibles", source, options.triangulation.covisibles);
   io::ReadSetting(section, "max_depth_m", source, options.max_depth_m);
+  io::ReadSetting(section, "max_coasting_frames", source, options.max_coasting_frames);
+  io::ReadSetting(section, "bridge_coasted_frames", source, options.bridge_coasted_frames);
   io::ReadSetting(section, "motion_prior_acceleration_mps2", source,
                   options.motion_prior_acceleration_mps2);
   io::ReadSetting(section, "motion_prior_outlier_sigmas", source,

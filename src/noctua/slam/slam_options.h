@@ -111,6 +111,12 @@ struct SlamOptions {
   // A constant-velocity prediction drifts with the square of time: a third of a second of
   // hand-held motion (10 frames at 30 Hz) stays within centimetres; 0 turns coasting off.
   int max_coasting_frames = 10;
+  // Coasted frames get, in the finished trajectory (RgbdSlam::Trajectory), the pose interpolated
+  // in time between the tracked frame before them and the next tracked one (after lost frames
+  // too, which keep no pose) instead of the prediction made when they came: once the camera is
+  // found again both ends of the gap are measured, and the prediction only knew one. The live
+  // pose (TrackResult, frames.csv's σ) is the prediction either way.
+  bool bridge_coasted_frames = true;
   double certain_sigma_ratio = 2.0;
   // Root-mean-square acceleration of the camera, m/s²; 0 turns the motion prior off.
   // With it, each frame's final pose optimisation also weighs how far the camera centre is from

@@ -139,6 +139,7 @@ TrackResult Tracker::Track(Frame frame) {
   if ((ok || coasted) && reference_ != nullptr) {
     record.reference = reference_;
     record.pose_c_r = current_->pose_cw * reference_->pose_cw().inverse();
+    record.coasted = coasted;
   }
   records_.push_back(record);
   // A lost frame does not become the last frame: the motion model and relocalisation compare

@@ -57,6 +57,7 @@ struct FrameRecord {
   long frame_id = 0;
   double timestamp = 0.0;
   const KeyFrame* reference = nullptr;  // nullptr: not tracked
+  bool coasted = false;                 // the motion model's pose (TrackingState::kCoasting)
   geometry::Pose pose_c_r = geometry::Pose::Identity();
 };
 
