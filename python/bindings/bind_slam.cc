@@ -63,10 +63,12 @@ class Slam {
   // trajectory may bridge).
   std::optional<geometry::Pose> CurrentPose() const {
     const auto& records = slam_->tracker().records();
-    if (records.empty() || records.back().reference == nullptr) return std::nullopt;
+    if (records.empty()) return std::nullopt;
     if (last_.state != slam::TrackingState::kOk && last_.state != slam::TrackingState::kCoasting)
       return std::nullopt;
-    return (records.back().pose_c_r * records.back().reference->pose_cw()).inverse();
+    const std::optional<geometry::Pose> pose_cw = records.back().PoseCw();
+    if (!pose_cw) return std::nullopt;
+    return pose_cw->inverse();
   }
 
   slam::SlamSetup setup_;

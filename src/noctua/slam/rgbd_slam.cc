@@ -10,7 +10,6 @@
 #include <optional>
 #include <thread>
 
-#include "noctua/geometry/se3.h"
 #include "noctua/util/error.h"
 #include "noctua/util/timer.h"
 
@@ -82,52 +81,32 @@ TrackResult RgbdSlam::Track(Extracted extracted, bool advance_mapping) {
   return result;
 }
 
-namespace {
-
-// Each run of coasted frames right after a tracked frame gets the poses interpolated in time
-// between that frame and the next tracked one, lost frames between left without a pose
-// (SlamOptions::bridge_coasted_frames). poses_wc holds one entry per record, none where a record
-// has no pose.
-void BridgeCoastedFrames(const std::vector<FrameRecord>& records,
-                         std::vector<std::optional<geometry::Pose>>& poses_wc) {
-  const auto tracked = [&records](std::size_t i) {
-    return records[i].reference != nullptr && !records[i].coasted;
-  };
-  for (std::size_t first = 1; first < records.size(); ++first) {
-    if (!records[first].coasted || !tracked(first - 1)) continue;
-    std::size_t end = first;
-    while (end < records.size() && records[end].coasted) ++end;
-    std::size_t next = end;
-    while (next < records.size() && records[next].reference == nullptr) ++next;
-    if (next < records.size() && tracked(next)) {
-      const double t0 = records[first - 1].timestamp;
-      const double span = records[next].timestamp - t0;
-      for (std::size_t k = first; k < end; ++k) {
-        // Frames without distinct timestamps are spaced evenly.
-        const double alpha =
-            span > 0.0 ? (records[k].timestamp - t0) / span
-                       : static_cast<double>(k - first + 1) / static_cast<double>(next - first + 1);
-        poses_wc[k] = geometry::Interpolate(*poses_wc[first - 1], *poses_wc[next], alpha);
-      }
-    }
-    first = end;
-  }
-}
-
-}  // namespace
-
 io::Trajectory RgbdSlam::Trajectory() {
   FinishMapping();
-  const std::vector<FrameRecord>& records = tracker_.records();
-  std::vector<std::optional<geometry::Pose>> poses_wc(records.size());
-  for (std::size_t i = 0; i < records.size(); ++i) {
-    if (records[i].reference == nullptr) continue;
-    poses_wc[i] = (records[i].pose_c_r * records[i].reference->pose_cw()).inverse();
-  }
-  if (options_.bridge_coasted_frames) BridgeCoastedFrames(records, poses_wc);
   std::vector<io::StampedPose> poses;
-  for (std::size_t i = 0; i < records.size(); ++i) {
-    if (poses_wc[i]) poses.push_back({records[i].timestamp, *poses_wc[i]});
+  std::vector<io::StampedPose> measured;  // the frames tracked, not coasted
+  std::vector<std::size_t> coasted;       // indices into poses
+  for (const FrameRecord& record : tracker_.records()) {
+    const std::optional<geometry::Pose> pose_cw = record.PoseCw();
+    if (!pose_cw) continue;
+    const io::StampedPose pose{record.timestamp, pose_cw->inverse()};
+    if (record.coasted) {
+      coasted.push_back(poses.size());
+    } else {
+      measured.push_back(pose);
+    }
+    poses.push_back(pose);
+  }
+  // SlamOptions::bridge_coasted_frames: a coasted frame gets the pose interpolated in time between
+  // the tracked frames around it (lost frames between have no pose); one after the last tracked
+  // frame keeps the prediction.
+  if (options_.bridge_coasted_frames && !coasted.empty()) {
+    const io::Trajectory tracked(std::move(measured));
+    for (const std::size_t i : coasted) {
+      const std::optional<geometry::Pose> bridged =
+          tracked.Interpolate(poses[i].timestamp, std::numeric_limits<double>::infinity());
+      if (bridged) poses[i].pose = *bridged;
+    }
   }
   return io::Trajectory(std::move(poses));
 }
@@ -152,9 +131,8 @@ struct PreparedFrame {
 
 // The pose of the frame the tracker recorded last, when it has one.
 std::optional<geometry::Pose> LastPose(const Tracker& tracker) {
-  if (tracker.records().empty() || tracker.records().back().reference == nullptr) return {};
-  const FrameRecord& record = tracker.records().back();
-  return record.pose_c_r * record.reference->pose_cw();
+  if (tracker.records().empty()) return {};
+  return tracker.records().back().PoseCw();
 }
 
 // Items made in order on a thread of their own until `make` has none left, up to `capacity`

@@ -238,8 +238,8 @@ bool Tracker::Initialise(Frame& frame) {
 void Tracker::UpdateLastFrame() {
   // The last frame's pose follows later refinement of its reference keyframe.
   const FrameRecord& record = records_.back();
-  if (record.reference != nullptr && record.frame_id == last_->id) {
-    last_->pose_cw = record.pose_c_r * record.reference->pose_cw();
+  if (record.frame_id == last_->id) {
+    if (const std::optional<geometry::Pose> pose_cw = record.PoseCw()) last_->pose_cw = *pose_cw;
   }
   // ORB-SLAM's RGB-D visual odometry: close depth points of the last frame that are not in the
   // map become temporary points, which keeps the motion model matching in fast motion.

@@ -59,6 +59,11 @@ struct FrameRecord {
   const KeyFrame* reference = nullptr;  // nullptr: not tracked
   bool coasted = false;                 // the motion model's pose (TrackingState::kCoasting)
   geometry::Pose pose_c_r = geometry::Pose::Identity();
+  // T_camera_world with the reference keyframe's pose as it is now; none when not tracked.
+  std::optional<geometry::Pose> PoseCw() const {
+    if (reference == nullptr) return std::nullopt;
+    return pose_c_r * reference->pose_cw();
+  }
 };
 
 // ORB-SLAM2's RGB-D tracking: constant-velocity prediction and projection search, reference
