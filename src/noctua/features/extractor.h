@@ -28,7 +28,7 @@ using DynamicMaskSource = std::function<cv::Mat(const cv::Mat& image)>;
 // What noise-adaptive extraction (NoiseAdaptiveOptions) chose for the frame.
 struct ConditioningStats {
   double gain = 1.0;
-  double noise_sigma = 0.0;  // grey levels, after the gain
+  double noise_sigma = 0.0;  // grey levels, after the gain, at FAST's ring radius
   double blur_sigma = 0.0;   // pixels (0: none)
   int initial_fast_threshold = 0;
   int min_fast_threshold = 0;

@@ -16,21 +16,29 @@ constexpr double kMedianOfMagnitude = 0.6745;
 
 }  // namespace
 
-double EstimateNoiseSigma(const cv::Mat& gray8u) {
+double EstimateNoiseSigma(const cv::Mat& gray8u) { return EstimateNoiseSigmaAtSpacing(gray8u, 1); }
+
+double EstimateNoiseSigmaAtSpacing(const cv::Mat& gray8u, int spacing) {
   if (gray8u.empty() || gray8u.type() != CV_8UC1) {
     throw Error("noise estimate needs a non-empty 8-bit grey image");
   }
-  if (gray8u.rows < 3 || gray8u.cols < 3) return 0.0;
-  const cv::Mat mask = (cv::Mat_<float>(3, 3) << 1, -2, 1, -2, 4, -2, 1, -2, 1);
+  if (spacing < 1) throw Error("noise estimate needs a tap spacing of at least 1 pixel");
+  if (gray8u.rows < 2 * spacing + 1 || gray8u.cols < 2 * spacing + 1) return 0.0;
+  // Immerkaer's mask is the outer product of the second difference [1 -2 1] with itself.
+  cv::Mat second_difference = cv::Mat::zeros(1, 2 * spacing + 1, CV_32F);
+  second_difference.at<float>(0, 0) = 1.0f;
+  second_difference.at<float>(0, spacing) = -2.0f;
+  second_difference.at<float>(0, 2 * spacing) = 1.0f;
   cv::Mat response;
-  cv::filter2D(gray8u, response, CV_16S, mask, cv::Point(-1, -1), 0, cv::BORDER_REFLECT);
+  cv::sepFilter2D(gray8u, response, CV_16S, second_difference, second_difference, cv::Point(-1, -1),
+                  0, cv::BORDER_REFLECT);
   // A histogram of |response| (at most 16 * 255) finds the median in one pass.
   std::array<int, 16 * 255 + 1> histogram{};
   int count = 0;
-  for (int r = 1; r + 1 < gray8u.rows; ++r) {
+  for (int r = spacing; r + spacing < gray8u.rows; ++r) {
     const auto* grey = gray8u.ptr<std::uint8_t>(r);
     const auto* value = response.ptr<std::int16_t>(r);
-    for (int c = 1; c + 1 < gray8u.cols; ++c) {
+    for (int c = spacing; c + spacing < gray8u.cols; ++c) {
       if (grey[c] == 0 || grey[c] == 255) continue;
       ++histogram[static_cast<std::size_t>(std::abs(value[c]))];
       ++count;

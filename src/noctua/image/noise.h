@@ -19,4 +19,10 @@ double EstimateNoiseSigma(const cv::Mat& gray8u);
 // where the pixel-scale mask barely sees it, and FAST works on every pyramid level.
 double EstimateNoiseSigmaAcrossScales(const cv::Mat& gray8u);
 
+// The same mask with its taps `spacing` pixels apart (1: EstimateNoiseSigma): the noise of the
+// comparisons a detector makes between pixels that far apart, as FAST's ring does at radius 3.
+// Noise a camera leaves correlated (JPEG blocks, demosaicing) or that smoothing made so is larger
+// there than a pixel-scale estimate and the white-noise rules built on it say.
+double EstimateNoiseSigmaAtSpacing(const cv::Mat& gray8u, int spacing);
+
 }  // namespace noctua::image

@@ -80,7 +80,34 @@ TEST(EstimateNoiseSigmaAcrossScales, SeesNoiseThatCompressionMovedToCoarserScale
   EXPECT_GT(EstimateNoiseSigmaAcrossScales(correlated), 2.0 * EstimateNoiseSigma(correlated));
 }
 
+TEST(EstimateNoiseSigmaAtSpacing, MeasuresNoiseAtTheScaleOfTheComparisons) {
+  const cv::Mat ramp = Ramp(cv::Size(320, 240));
+  // White noise has the same deviation at every spacing.
+  const cv::Mat white = WithNoise(ramp, 5.0, 2);
+  EXPECT_DOUBLE_EQ(EstimateNoiseSigmaAtSpacing(white, 1), EstimateNoiseSigma(white));
+  EXPECT_NEAR(EstimateNoiseSigmaAtSpacing(white, 3), 5.0, 0.5);
+  // Noise smoothed over a pixel (as a JPEG camera or a Gaussian leaves it): pixels 3 apart differ
+  // by nearly its full deviation, neighbours by far less.
+  cv::Mat noise(ramp.size(), CV_32F);
+  cv::RNG rng(4);
+  rng.fill(noise, cv::RNG::NORMAL, 0.0, 12.0);
+  cv::GaussianBlur(noise, noise, cv::Size(), 1.0);
+  cv::Scalar mean, deviation;
+  cv::meanStdDev(noise, mean, deviation);
+  cv::Mat correlated;
+  cv::Mat(ramp + noise).convertTo(correlated, CV_8U);
+  const double at_three = EstimateNoiseSigmaAtSpacing(correlated, 3);
+  EXPECT_NEAR(at_three, deviation[0], 0.15 * deviation[0]);
+  EXPECT_LT(EstimateNoiseSigma(correlated), 0.5 * at_three);
+  // A ramp still reads as no noise at any spacing.
+  cv::Mat clean;
+  ramp.convertTo(clean, CV_8U);
+  EXPECT_LT(EstimateNoiseSigmaAtSpacing(clean, 3), 0.3);
+}
+
 TEST(EstimateNoiseSigma, RefusesWhatIsNotGrey8Bit) {
+  EXPECT_THROW(EstimateNoiseSigmaAtSpacing(cv::Mat(9, 9, CV_8UC1), 0), Error);
+  EXPECT_EQ(EstimateNoiseSigmaAtSpacing(cv::Mat(6, 6, CV_8UC1, cv::Scalar(9)), 3), 0.0);
   EXPECT_THROW(EstimateNoiseSigma(cv::Mat()), Error);
   EXPECT_THROW(EstimateNoiseSigma(cv::Mat(8, 8, CV_8UC3)), Error);
   EXPECT_EQ(EstimateNoiseSigma(cv::Mat(2, 2, CV_8UC1, cv::Scalar(9))), 0.0);
