@@ -31,6 +31,32 @@ cv::Mat Darkened(const cv::Mat& gray, double level, double sigma) {
   return out;
 }
 
+// A flat wall of grey `level` in the dark, seen by a sensor with Gaussian noise of `sigma`, left
+// correlated over `correlation_px` pixels (0: white): every corner FAST finds on it is noise.
+cv::Mat NoisyWall(double level, double sigma, double correlation_px, std::uint64_t seed) {
+  cv::Mat noise(240, 320, CV_32F);
+  cv::RNG rng(seed);
+  rng.fill(noise, cv::RNG::NORMAL, 0.0, sigma);
+  if (correlation_px > 0.0) cv::GaussianBlur(noise, noise, cv::Size(), correlation_px);
+  cv::Mat noisy;
+  cv::Mat(noise + level).convertTo(noisy, CV_8U);
+  return noisy;
+}
+
+// `orb`'s extraction (ORB-SLAM's fixed thresholds, no enhancement, no filters).
+ExtractorOptions FixedThresholds() {
+  ExtractorOptions fixed;
+  fixed.enhancement.method = image::EnhancementMethod::kNone;
+  fixed.dynamic_filter.enabled = fixed.edge_filter.enabled = fixed.nms_filter.enabled = false;
+  return fixed;
+}
+
+ExtractorOptions NoiseAdaptive() {
+  ExtractorOptions adaptive = FixedThresholds();
+  adaptive.noise_adaptive.enabled = true;
+  return adaptive;
+}
+
 TEST(ConditionFrame, LeavesAWellExposedFrameAsItIs) {
   const cv::Mat frame = RealFrame();
   NoiseAdaptiveOptions options;
@@ -73,21 +99,9 @@ TEST(ConditionFrame, BrightensADarkFrameAndRaisesThresholdsAboveItsNoise) {
 }
 
 TEST(NoiseAdaptiveExtraction, FindsNoCornersInPureNoiseWhereFixedThresholdsFindMany) {
-  // A flat grey wall in the dark, seen by a noisy sensor: every corner FAST finds there is noise.
-  cv::Mat wall(240, 320, CV_32F, cv::Scalar(30.0));
-  cv::Mat noise(wall.size(), CV_32F);
-  cv::RNG rng(9);
-  rng.fill(noise, cv::RNG::NORMAL, 0.0, 3.0);
-  cv::Mat noisy;
-  cv::Mat(wall + noise).convertTo(noisy, CV_8U);
-
-  ExtractorOptions fixed;
-  fixed.enhancement.method = image::EnhancementMethod::kNone;
-  fixed.dynamic_filter.enabled = fixed.edge_filter.enabled = fixed.nms_filter.enabled = false;
-  ExtractorOptions adaptive = fixed;
-  adaptive.noise_adaptive.enabled = true;
-  const Extraction with_fixed = Extractor(fixed).Extract(noisy);
-  const Extraction with_adaptive = Extractor(adaptive).Extract(noisy);
+  const cv::Mat noisy = NoisyWall(30.0, 3.0, 0.0, 9);
+  const Extraction with_fixed = Extractor(FixedThresholds()).Extract(noisy);
+  const Extraction with_adaptive = Extractor(NoiseAdaptive()).Extract(noisy);
   EXPECT_GT(with_fixed.keypoints.size(), 50u);
   EXPECT_LT(with_adaptive.keypoints.size(), with_fixed.keypoints.size() / 10);
   ASSERT_TRUE(with_adaptive.stats.conditioning.has_value());
@@ -102,30 +116,20 @@ TEST(NoiseAdaptiveExtraction, HoldsBackNoiseTheCameraLeftCorrelated) {
   // demosaicing). Smoothing by the white-noise rule leaves more noise at FAST's ring radius than
   // that rule says; the noise left is measured there instead.
   constexpr double kWall = 30.0;
-  cv::Mat wall(240, 320, CV_32F, cv::Scalar(kWall));
-  cv::Mat noise(wall.size(), CV_32F);
-  cv::RNG rng(13);
-  rng.fill(noise, cv::RNG::NORMAL, 0.0, 6.0);
-  cv::GaussianBlur(noise, noise, cv::Size(), 1.0);
-  cv::Mat noisy;
-  cv::Mat(wall + noise).convertTo(noisy, CV_8U);
+  const cv::Mat noisy = NoisyWall(kWall, 6.0, 1.0, 13);
   const double gain = NoiseAdaptiveOptions().target_mean_grey / kWall;
   cv::Mat brightened;  // the same gain, without the noise handling
   noisy.convertTo(brightened, CV_8U, gain);
-
-  ExtractorOptions fixed;
-  fixed.enhancement.method = image::EnhancementMethod::kNone;
-  fixed.dynamic_filter.enabled = fixed.edge_filter.enabled = fixed.nms_filter.enabled = false;
-  ExtractorOptions adaptive = fixed;
-  adaptive.noise_adaptive.enabled = true;
-  const Extraction with_fixed = Extractor(fixed).Extract(brightened);
+  const ExtractorOptions adaptive = NoiseAdaptive();
+  const Extraction with_fixed = Extractor(FixedThresholds()).Extract(brightened);
   const Extraction with_adaptive = Extractor(adaptive).Extract(noisy);
   ASSERT_TRUE(with_adaptive.stats.conditioning.has_value());
   EXPECT_NEAR(with_adaptive.stats.conditioning->gain, gain, 0.1);
   EXPECT_GT(with_fixed.keypoints.size(), 500u);
   EXPECT_LT(with_adaptive.keypoints.size(), with_fixed.keypoints.size() / 5);
   // Measured at the ring radius, the noise left after smoothing sets the thresholds.
-  const FrameConditioning conditioning = ConditionFrame(noisy, fixed.fast, adaptive.noise_adaptive);
+  const FrameConditioning conditioning =
+      ConditionFrame(noisy, adaptive.fast, adaptive.noise_adaptive);
   EXPECT_GT(conditioning.blur_sigma, 0.0);
   EXPECT_LE(conditioning.residual_sigma, adaptive.noise_adaptive.max_residual_sigma);
   EXPECT_GE(conditioning.fast.min_fast_threshold,
