@@ -16,7 +16,7 @@ double EstimateNoiseSigma(const cv::Mat& gray8u);
 // EstimateNoiseSigma at the pixel scale and at half scale (cv::pyrDown), the latter referred back
 // to the pixel scale as if the noise were white (pyrDown keeps 0.273 of white noise's deviation);
 // the larger of the two. JPEG compression and demosaicing move a sensor's noise to coarser scales
-// where the pixel-scale mask barely sees it, and FAST works on every pyramid level.
+// where the pixel-scale mask barely sees it. (What FAST meets is EstimateNoiseSigmaAtSpacing's.)
 double EstimateNoiseSigmaAcrossScales(const cv::Mat& gray8u);
 
 // The same mask with its taps `spacing` pixels apart (1: EstimateNoiseSigma): the noise of the

@@ -84,8 +84,9 @@ TEST(EstimateNoiseSigmaAtSpacing, MeasuresNoiseAtTheScaleOfTheComparisons) {
   const cv::Mat ramp = Ramp(cv::Size(320, 240));
   // White noise has the same deviation at every spacing.
   const cv::Mat white = WithNoise(ramp, 5.0, 2);
-  EXPECT_DOUBLE_EQ(EstimateNoiseSigmaAtSpacing(white, 1), EstimateNoiseSigma(white));
-  EXPECT_NEAR(EstimateNoiseSigmaAtSpacing(white, 3), 5.0, 0.5);
+  const double at_one = EstimateNoiseSigmaAtSpacing(white, 1);
+  EXPECT_NEAR(at_one, 5.0, 0.5);
+  EXPECT_NEAR(EstimateNoiseSigmaAtSpacing(white, 3), at_one, 0.1 * at_one);
   // Noise smoothed over a pixel (as a JPEG camera or a Gaussian leaves it): pixels 3 apart differ
   // by nearly its full deviation, neighbours by far less.
   cv::Mat noise(ramp.size(), CV_32F);
