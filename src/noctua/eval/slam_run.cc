@@ -66,6 +66,8 @@ nlohmann::json RunJson(const SlamRunOptions& options, const SlamRunReport& repor
     json["dropped_frame_indices"].push_back(dropped.index);
   }
   json["wall_s"] = run.wall_s;
+  // After the last frame, within wall_s (slam::SlamOptions::final_ba_iterations; 0: none ran).
+  json["final_ba_ms"] = run.final_ba_ms;
   json["frames_per_second"] = run.FramesPerSecond();
   json["overlap_extraction"] = !options.sequential;
   if (!config.detector_model.empty()) {
@@ -106,16 +108,17 @@ std::string TimingMarkdown(const std::vector<StageTiming>& timing, nlohmann::jso
 
 std::string CountsMarkdown(const SlamRunReport& report, bool sequential) {
   const slam::SequenceRun& run = report.run;
-  char counts[320];
+  char counts[400];
   std::snprintf(
       counts, sizeof(counts),
       "\nframes %zu, with a pose %zu (coasting %zu), lost %zu, dropped %zu, keyframes %d, "
       "map points %d, loops closed %zu, peak RSS %.1f MB\n"
-      "%.1f frames/s (%.2f s for the run, loading included, %s)\n",
+      "%.1f frames/s (%.2f s for the run, loading included, %s; the whole map adjusted at the "
+      "end in %.0f ms)\n",
       run.frames.size(), run.trajectory.size(), run.coasted_frames.size(), run.lost_frames.size(),
       run.dropped_frames.size(), run.keyframes, run.map_points, run.loops.size(),
       PeakResidentMemoryMb(), run.FramesPerSecond(), run.wall_s,
-      sequential ? "sequential" : "extraction overlapped with tracking");
+      sequential ? "sequential" : "extraction overlapped with tracking", run.final_ba_ms);
   return counts;
 }
 

@@ -285,17 +285,7 @@ std::vector<KeyFrame*> LoopCloser::SpanningTree(const std::vector<KeyFrame*>& ke
 void LoopCloser::Correct(KeyFrame* keyframe, const LoopMatch& match, Map& map,
                          LocalMapper& mapper) {
   const geometry::Pose before_cw = keyframe->pose_cw();
-  // Culled keyframes keep their pose relative to the latest good keyframe before them.
-  std::vector<std::pair<KeyFrame*, std::pair<KeyFrame*, geometry::Pose>>> culled;
-  KeyFrame* anchor = nullptr;
-  for (const auto& owned : map.all_keyframes()) {
-    KeyFrame* k = owned.get();
-    if (!k->bad()) {
-      anchor = k;
-    } else if (anchor != nullptr) {
-      culled.push_back({k, {anchor, k->pose_cw() * anchor->pose_cw().inverse()}});
-    }
-  }
+  const CulledKeyFramePoses culled(map);
   // The keyframe and its covisibles move rigidly by the correction (old world -> corrected).
   const geometry::Pose correction = match.corrected_cw.inverse() * keyframe->pose_cw();
   std::vector<KeyFrame*> group = {keyframe};
@@ -332,8 +322,7 @@ void LoopCloser::Correct(KeyFrame* keyframe, const LoopMatch& match, Map& map,
     GlobalBundleAdjustment(map.KeyFrames(), pyramid_, options_.bf,
                            options_.loop_closing.global_ba_iterations);
   }
-  for (const auto& [k, relative] : culled)
-    k->set_pose_cw(relative.second * relative.first->pose_cw());
+  culled.Restore();
   loop_edges_.emplace_back(keyframe, match.loop);
   last_loop_keyframe_id_ = keyframe->id();
   consistent_groups_.clear();

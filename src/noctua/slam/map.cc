@@ -289,4 +289,21 @@ std::vector<const MapPoint*> Map::MapPoints() const {
   return good;
 }
 
+CulledKeyFramePoses::CulledKeyFramePoses(const Map& map) {
+  const KeyFrame* anchor = nullptr;
+  for (const auto& owned : map.all_keyframes()) {
+    KeyFrame* keyframe = owned.get();
+    if (!keyframe->bad()) {
+      anchor = keyframe;
+    } else if (anchor != nullptr) {
+      anchored_.push_back({keyframe, anchor, keyframe->pose_cw() * anchor->pose_cw().inverse()});
+    }
+  }
+}
+
+void CulledKeyFramePoses::Restore() const {
+  for (const Anchored& a : anchored_)
+    a.culled->set_pose_cw(a.culled_from_anchor * a.anchor->pose_cw());
+}
+
 }  // namespace noctua::slam

@@ -205,4 +205,22 @@ class Map {
   friend class MapFile;  // map_io.h: saves the good points in id order
 };
 
+// Culled keyframes keep only their pose, for the frames that refer to it. When the good
+// keyframes move (a loop corrected, the whole map adjusted), each culled one keeps its pose
+// relative to the latest good keyframe made before it: recorded at construction, re-applied by
+// Restore.
+class CulledKeyFramePoses {
+ public:
+  explicit CulledKeyFramePoses(const Map& map);
+  void Restore() const;
+
+ private:
+  struct Anchored {
+    KeyFrame* culled;
+    const KeyFrame* anchor;
+    geometry::Pose culled_from_anchor;
+  };
+  std::vector<Anchored> anchored_;
+};
+
 }  // namespace noctua::slam

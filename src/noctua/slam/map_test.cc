@@ -5,6 +5,7 @@
 #include <memory>
 #include <vector>
 
+#include "noctua/geometry/se3.h"
 #include "noctua/testing/test_camera.h"
 
 namespace noctua::slam {
@@ -83,6 +84,47 @@ TEST_F(MapReclaimTest, PointsLeftByACulledKeyFrameAreFreed) {
   EXPECT_EQ(map_.ReclaimMapPoints({}), kPoints);
   EXPECT_EQ(map_.NumMapPointsAllocated(), 0);
   for (MapPoint* point : first_->map_points()) EXPECT_EQ(point, nullptr);
+}
+
+// Keyframes 0-3 with 2 and 3 culled: when the good ones move, each culled keyframe keeps its
+// pose relative to the latest good one before it (here keyframe 1 for both), and nothing else
+// moves.
+TEST(CulledKeyFramePosesTest, CulledKeyFramesFollowTheLatestGoodKeyFrameBeforeThem) {
+  const geometry::PinholeCamera camera = testing::TestCamera();
+  const std::vector<cv::KeyPoint> keypoints = {cv::KeyPoint(100.0f, 100.0f, 31.0f)};
+  const cv::Mat depth(480, 640, CV_32F, cv::Scalar(2.0f));
+  auto features = std::make_shared<const FrameFeatures>(
+      keypoints, cv::Mat(1, 32, CV_8U, cv::Scalar(0)), depth, camera, 40.0, 0.1);
+  Map map;
+  std::vector<KeyFrame*> keyframes;
+  for (int i = 0; i < 4; ++i) {
+    Frame frame(i, i, features);
+    Eigen::Matrix<double, 6, 1> twist;
+    twist << 0.1 * i, -0.05 * i, 0.02, 0.3 * i, 0.1, -0.2 * i;
+    frame.pose_cw = geometry::Exp(twist);
+    keyframes.push_back(map.AddKeyFrame(frame));
+  }
+  keyframes[2]->SetBad();
+  keyframes[3]->SetBad();
+  const geometry::Pose third_from_second =
+      keyframes[2]->pose_cw() * keyframes[1]->pose_cw().inverse();
+  const geometry::Pose fourth_from_second =
+      keyframes[3]->pose_cw() * keyframes[1]->pose_cw().inverse();
+  const geometry::Pose first = keyframes[0]->pose_cw();
+  const geometry::Pose third = keyframes[2]->pose_cw();
+
+  const CulledKeyFramePoses culled(map);
+  Eigen::Matrix<double, 6, 1> move;
+  move << 0.2, 0.1, -0.3, 0.5, -0.4, 0.25;
+  keyframes[1]->set_pose_cw(geometry::Exp(move) * keyframes[1]->pose_cw());
+  culled.Restore();
+
+  EXPECT_TRUE((keyframes[2]->pose_cw() * keyframes[1]->pose_cw().inverse())
+                  .isApprox(third_from_second, 1e-12));
+  EXPECT_TRUE((keyframes[3]->pose_cw() * keyframes[1]->pose_cw().inverse())
+                  .isApprox(fourth_from_second, 1e-12));
+  EXPECT_FALSE(keyframes[2]->pose_cw().isApprox(third, 1e-3));  // it did move
+  EXPECT_TRUE(keyframes[0]->pose_cw().isApprox(first, 1e-15));
 }
 
 }  // namespace

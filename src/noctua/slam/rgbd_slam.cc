@@ -368,7 +368,7 @@ SequenceRun RunFrames(RgbdSlam& slam, io::FrameSource& source, const RunOptions&
     if (run_options.progress) run_options.progress(i, count, run.frames.back());
     mapping_slice_ms = slam.AdvanceMapping();
   }
-  slam.FinishMapping();
+  run.final_ba_ms = slam.FinishRun();
   run.wall_s = run_watch.ElapsedMs() / 1000.0;
   run.dropped_frames = source.dropped();
   run.trajectory = slam.Trajectory();

@@ -60,6 +60,10 @@ class RgbdSlam {
   // Lands the mapping still running in the background, so that the map is final (before saving
   // or reading it at the end of a run).
   void FinishMapping() { tracker_.FinishMapping(); }
+  // The end of a run (Tracker::FinishRun): the mapping landed and the whole map adjusted
+  // (SlamOptions::final_ba_iterations), so that Trajectory and the saved map get its result.
+  // RunFrames calls it after the last frame. Returns the adjustment's ms.
+  double FinishRun() { return tracker_.FinishRun(); }
   const Tracker& tracker() const { return tracker_; }
   // Starts from a saved map (Tracker::UseMap); before the first frame.
   void UseMap(Map map, bool localize) { tracker_.UseMap(std::move(map), localize); }
@@ -120,6 +124,7 @@ struct SequenceRun {
   std::vector<io::DroppedFrame> dropped_frames;
   bool interrupted = false;  // RunOptions::stop ended the run before the last frame
   double wall_s = 0.0;       // whole run, loading included
+  double final_ba_ms = 0.0;  // RgbdSlam::FinishRun's adjustment of the whole map, within wall_s
   double FramesPerSecond() const {
     return wall_s > 0.0 ? static_cast<double>(frames.size()) / wall_s : 0.0;
   }

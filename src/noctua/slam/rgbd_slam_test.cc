@@ -113,6 +113,39 @@ TEST_F(RgbdSlamTest, TracksEveryFrameWithTheBundleAdjustmentInTheBackground) {
   EXPECT_LT(ate.translation_m.rmse, 0.03);
 }
 
+// The whole map adjusted once the last frame is tracked (SlamOptions::final_ba_iterations): the
+// finished trajectory follows the adjusted keyframes, frames referring to culled keyframes too,
+// and on these frames the adjustment brings the trajectory closer to the ground truth (measured
+// 0.0127 against 0.0145 m).
+TEST_F(RgbdSlamTest, AdjustsTheWholeMapAtTheEndAndTheTrajectoryFollows) {
+  const auto run = [](int final_ba_iterations) {
+    SlamOptions options = setup_->options;
+    options.final_ba_iterations = final_ba_iterations;
+    RunOptions run_options;
+    run_options.max_frames = 100;
+    return RunSequence(*sequence_, setup_->camera.depth_factor, setup_->camera.Camera(),
+                       Orb(*setup_), options, run_options);
+  };
+  const SequenceRun none = run(0);
+  const SequenceRun adjusted = run(10);
+  EXPECT_EQ(none.final_ba_ms, 0.0);
+  EXPECT_GT(adjusted.final_ba_ms, 0.0);
+  ASSERT_EQ(adjusted.trajectory.size(), none.trajectory.size());
+  int moved = 0;
+  for (std::size_t i = 0; i < none.trajectory.size(); ++i) {
+    const geometry::Pose& before = none.trajectory.poses()[i].pose;
+    const geometry::Pose& after = adjusted.trajectory.poses()[i].pose;
+    if ((before.translation() - after.translation()).norm() > 1e-4) ++moved;
+  }
+  EXPECT_GT(moved, 90);  // all but frames around keyframe 0, which stays fixed
+  const auto ate = [&](const SequenceRun& r) {
+    return eval::ComputeAte(sequence_->ground_truth(), r.trajectory).translation_m.rmse;
+  };
+  std::cerr << "ATE without / with the final adjustment: " << ate(none) << " / " << ate(adjusted)
+            << " m; " << moved << " frames moved\n";
+  EXPECT_LT(ate(adjusted), ate(none));
+}
+
 // Mapping stage by stage over the frames after each keyframe (what `noctua slam` does): with a
 // slice shorter than any stage and frames extracted in line (no waiting for an extraction, when
 // more stages would run), exactly one stage runs per frame, so the schedule is the same every

@@ -845,4 +845,14 @@ void Tracker::FinishMapping() {
   mapper_.CollectBundleAdjustment(/*wait=*/true);
 }
 
+double Tracker::FinishRun() {
+  FinishMapping();
+  if (localize_ || options_.final_ba_iterations == 0 || map_.NumKeyFrames() < 2) return 0.0;
+  const Stopwatch watch;
+  const CulledKeyFramePoses culled(map_);
+  GlobalBundleAdjustment(map_.KeyFrames(), pyramid_, options_.bf, options_.final_ba_iterations);
+  culled.Restore();
+  return watch.ElapsedMs();
+}
+
 }  // namespace noctua::slam

@@ -85,6 +85,10 @@ class Tracker {
   // solving, if any (waits for it), so that the map is final: before reading the trajectory or
   // saving the map at the end of a run.
   void FinishMapping();
+  // FinishMapping, then the bundle adjustment of the whole map (SlamOptions::final_ba_iterations;
+  // never while localising). Returns the ms the adjustment took (0 when none ran). The end of a
+  // run: frames tracked after it are tracked against the adjusted map.
+  double FinishRun();
 
   // Starts from a saved map (map_io.h) instead of a new one, before the first frame: that frame
   // is relocalised in the map. With `localize` the map stays exactly as loaded: no keyframes or
