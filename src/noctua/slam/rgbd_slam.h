@@ -64,6 +64,10 @@ class RgbdSlam {
   // (SlamOptions::final_ba_iterations), so that Trajectory and the saved map get its result.
   // RunFrames calls it after the last frame. Returns the adjustment's ms.
   double FinishRun() { return tracker_.FinishRun(); }
+  // See Tracker::AdjustWholeMap; after FinishMapping.
+  double AdjustWholeMap(int iterations, int min_points) {
+    return tracker_.AdjustWholeMap(iterations, min_points);
+  }
   const Tracker& tracker() const { return tracker_; }
   // Starts from a saved map (Tracker::UseMap); before the first frame.
   void UseMap(Map map, bool localize) { tracker_.UseMap(std::move(map), localize); }

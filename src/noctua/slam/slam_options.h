@@ -151,11 +151,12 @@ struct SlamOptions {
   // (ATE 0.032 m) while 15, 20 and 30 all gave the same converged result (0.024 m).
   int local_ba_iterations = 20;
   // Once the last frame is tracked (RgbdSlam::FinishRun), the bundle adjustment of the whole map
-  // (every good keyframe and point, keyframe 0 fixed) for at most this many Ceres iterations; 0:
-  // none. Frames keep their pose relative to their reference keyframe, so the finished
-  // trajectory and a saved map follow the adjusted keyframes (the live poses of frames.csv do
-  // not). Never while localising: the map stays as loaded. On tum_fr1_rpy_200 10 and 30 gave the
-  // same result to the last digit (docs/slam.md, "Adjusting the whole map at the end").
+  // (every good keyframe and point; keyframe 0 fixed, and keyframes holding fewer than
+  // min_tracked_inliers points) for at most this many Ceres iterations; 0: none. Frames keep their
+  // pose relative to their reference keyframe, so the finished trajectory and a saved map follow
+  // the adjusted keyframes (the live poses of frames.csv do not). Never while localising: the map
+  // stays as loaded. On tum_fr1_rpy_200 10 and 30 gave the same result to the last digit
+  // (docs/slam.md, "Adjusting the whole map at the end").
   int final_ba_iterations = 10;
   bool local_ba = true;  // off: map points are never refined (for comparison)
   // Solve each keyframe's local bundle adjustment on a thread of its own while tracking goes on

@@ -847,10 +847,23 @@ void Tracker::FinishMapping() {
 
 double Tracker::FinishRun() {
   FinishMapping();
-  if (localize_ || options_.final_ba_iterations == 0 || map_.NumKeyFrames() < 2) return 0.0;
+  if (localize_ || options_.final_ba_iterations == 0) return 0.0;
+  return AdjustWholeMap(options_.final_ba_iterations, options_.min_tracked_inliers);
+}
+
+double Tracker::AdjustWholeMap(int iterations, int min_points) {
   const Stopwatch watch;
+  if (localize_) throw Error("the map of a localisation run stays as loaded: no adjustment");
+  // A keyframe that holds fewer map points than a frame needs to be tracked (one made from few
+  // but certain points, in the dark or among people) is held where tracking put it: freed with
+  // everything else, its few observations, some of them wrong, can pull it centimetres away, and
+  // the frames that refer to it with it (docs/slam.md).
+  std::vector<KeyFrame*> adjusted;
+  for (KeyFrame* keyframe : map_.KeyFrames()) {
+    if (keyframe->TrackedMapPoints(2) >= min_points) adjusted.push_back(keyframe);
+  }
   const CulledKeyFramePoses culled(map_);
-  GlobalBundleAdjustment(map_.KeyFrames(), pyramid_, options_.bf, options_.final_ba_iterations);
+  GlobalBundleAdjustment(adjusted, pyramid_, options_.bf, iterations);
   culled.Restore();
   return watch.ElapsedMs();
 }
