@@ -108,18 +108,21 @@ std::string TimingMarkdown(const std::vector<StageTiming>& timing, nlohmann::jso
 
 std::string CountsMarkdown(const SlamRunReport& report, bool sequential) {
   const slam::SequenceRun& run = report.run;
-  char counts[400];
+  char counts[320];
   std::snprintf(
       counts, sizeof(counts),
       "\nframes %zu, with a pose %zu (coasting %zu), lost %zu, dropped %zu, keyframes %d, "
       "map points %d, loops closed %zu, peak RSS %.1f MB\n"
-      "%.1f frames/s (%.2f s for the run, loading included, %s; the whole map adjusted at the "
-      "end in %.0f ms)\n",
+      "%.1f frames/s (%.2f s for the run, loading included, %s)\n",
       run.frames.size(), run.trajectory.size(), run.coasted_frames.size(), run.lost_frames.size(),
       run.dropped_frames.size(), run.keyframes, run.map_points, run.loops.size(),
       PeakResidentMemoryMb(), run.FramesPerSecond(), run.wall_s,
-      sequential ? "sequential" : "extraction overlapped with tracking", run.final_ba_ms);
-  return counts;
+      sequential ? "sequential" : "extraction overlapped with tracking");
+  if (run.final_ba_ms <= 0.0) return counts;
+  char adjusted[96];
+  std::snprintf(adjusted, sizeof(adjusted), "the whole map adjusted at the end in %.0f ms\n",
+                run.final_ba_ms);
+  return std::string(counts) + adjusted;
 }
 
 // One line on the map loaded and saved (none without either).

@@ -128,6 +128,7 @@ TEST_F(MapIoTest, LocalisesEveryFrameWithoutChangingTheMap) {
   const double ate = eval::ComputeAte(sequence_->ground_truth(), run.trajectory).translation_m.rmse;
   EXPECT_LE(ate, 0.02);
   EXPECT_EQ(session.Bytes(), *bytes_);  // nothing added, culled, moved or re-linked
+  EXPECT_THROW(session.slam.AdjustWholeMap(10, 0), Error);  // not even on request
 }
 
 // Localising in a map that kept few of the points its keyframes saw (culled as new points that

@@ -64,7 +64,7 @@ class RgbdSlam {
   // (SlamOptions::final_ba_iterations), so that Trajectory and the saved map get its result.
   // RunFrames calls it after the last frame. Returns the adjustment's ms.
   double FinishRun() { return tracker_.FinishRun(); }
-  // See Tracker::AdjustWholeMap; after FinishMapping.
+  // See Tracker::AdjustWholeMap.
   double AdjustWholeMap(int iterations, int min_points) {
     return tracker_.AdjustWholeMap(iterations, min_points);
   }

@@ -846,14 +846,17 @@ void Tracker::FinishMapping() {
 }
 
 double Tracker::FinishRun() {
-  FinishMapping();
-  if (localize_ || options_.final_ba_iterations == 0) return 0.0;
+  if (localize_ || options_.final_ba_iterations == 0) {
+    FinishMapping();
+    return 0.0;
+  }
   return AdjustWholeMap(options_.final_ba_iterations, options_.min_tracked_inliers);
 }
 
 double Tracker::AdjustWholeMap(int iterations, int min_points) {
+  if (localize_) throw Error("slam: a localisation run leaves its map as loaded: no adjustment");
+  FinishMapping();
   const Stopwatch watch;
-  if (localize_) throw Error("the map of a localisation run stays as loaded: no adjustment");
   // A keyframe that holds fewer map points than a frame needs to be tracked (one made from few
   // but certain points, in the dark or among people) is held where tracking put it: freed with
   // everything else, its few observations, some of them wrong, can pull it centimetres away, and

@@ -89,7 +89,8 @@ class Tracker {
   // never while localising). Returns the ms the adjustment took (0 when none ran). The end of a
   // run: frames tracked after it are tracked against the adjusted map.
   double FinishRun();
-  // Bundle adjustment of the whole map for at most `iterations`, keyframe 0 and the keyframes
+  // FinishMapping, then the bundle adjustment of the whole map for at most `iterations`, keyframe
+  // 0 and the keyframes
   // that hold fewer than `min_points` map points (KeyFrame::TrackedMapPoints(2)) held fixed; the
   // culled keyframes follow (CulledKeyFramePoses). Returns its ms. Throws noctua::Error while
   // localising.
