@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <utility>
 
 #include "noctua/util/error.h"
 
@@ -287,6 +288,26 @@ std::vector<const MapPoint*> Map::MapPoints() const {
     if (!point->bad()) good.push_back(point.get());
   }
   return good;
+}
+
+std::vector<KeyFrame*> NearestViewpoints(const Map& map, const geometry::Pose& pose_cw,
+                                         double max_axis_angle_rad, int count) {
+  // Rows of the world-to-camera rotation are the camera's axes in the world: row 2 looks ahead.
+  const Eigen::Vector3d axis = pose_cw.linear().row(2).transpose();
+  const Eigen::Vector3d centre = pose_cw.inverse().translation();
+  const double min_axis_cos = std::cos(max_axis_angle_rad);
+  std::vector<std::pair<double, KeyFrame*>> by_distance;
+  for (KeyFrame* keyframe : map.KeyFrames()) {
+    if (keyframe->pose_cw().linear().row(2).dot(axis) < min_axis_cos) continue;
+    by_distance.emplace_back((keyframe->CameraCentre() - centre).norm(), keyframe);
+  }
+  const auto kept = std::min(by_distance.size(), static_cast<std::size_t>(std::max(count, 0)));
+  // Keyframes come in id order and stable_sort keeps it among equal distances.
+  std::stable_sort(by_distance.begin(), by_distance.end(),
+                   [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::vector<KeyFrame*> nearest;
+  for (std::size_t i = 0; i < kept; ++i) nearest.push_back(by_distance[i].second);
+  return nearest;
 }
 
 CulledKeyFramePoses::CulledKeyFramePoses(const Map& map) {

@@ -205,6 +205,13 @@ class Map {
   friend class MapFile;  // map_io.h: saves the good points in id order
 };
 
+// Up to `count` good keyframes taken from the viewpoints nearest to the camera pose `pose_cw`:
+// of those whose optical axis is within `max_axis_angle_rad` of the pose's, the camera centres
+// closest first (ties by id). A keyframe turned further away sees another part of the scene,
+// however close its centre.
+std::vector<KeyFrame*> NearestViewpoints(const Map& map, const geometry::Pose& pose_cw,
+                                         double max_axis_angle_rad, int count);
+
 // Culled keyframes keep only their pose, for the frames that refer to it. When the good
 // keyframes move (a loop corrected, the whole map adjusted), each culled one keeps its pose
 // relative to the latest good keyframe made before it: recorded at construction, re-applied by

@@ -152,7 +152,7 @@ TEST_F(MapIoTest, LocalisesInAThinnedMapFromTheKeyFramesDepth) {
   const double ate = eval::ComputeAte(sequence_->ground_truth(), run.trajectory).translation_m.rmse;
   EXPECT_LT(kept, points_ / 4);
   EXPECT_EQ(tracked, kFrames);
-  EXPECT_LE(ate, 0.03);  // measured 0.0131 m; the whole map gives 0.0164 m
+  EXPECT_LE(ate, 0.03);  // measured 0.0135 m; the whole map gives 0.0134 m
   EXPECT_EQ(session.slam.tracker().map().NumMapPoints(), kept);
 }
 
@@ -270,8 +270,12 @@ TEST(Crc32Test, KnownValues) {
 
 // The issue's target through eval::SlamRunner, as `noctua slam --save-map` and then
 // `--load-map --localize` run it: every frame localised, as accurately as the map allows, and
-// the map unchanged.
-class MapReuseRunTest : public ::testing::TestWithParam<std::string> {};
+// the map unchanged. orb on all 200 frames, which pass over the same places several times (the
+// target's run); paper on the first kFrames.
+class MapReuseRunTest : public ::testing::TestWithParam<std::string> {
+ protected:
+  int Frames() const { return GetParam() == "orb" ? 200 : kFrames; }
+};
 
 TEST_P(MapReuseRunTest, SavedMapLocalisesEveryFrameOfTheSameCut) {
   const auto dir = std::filesystem::path(::testing::TempDir()) / ("map_reuse_" + GetParam());
@@ -280,7 +284,7 @@ TEST_P(MapReuseRunTest, SavedMapLocalisesEveryFrameOfTheSameCut) {
   options.source.dataset = Fr1();
   options.config = Config();
   options.method = GetParam();
-  options.max_frames = kFrames;
+  options.max_frames = Frames();
   options.save_map = dir / "fr1.map";
   // The bounds below compare two runs: both deterministic, or the background bundle
   // adjustment's timing moves the mapping run's error by more than the margin.
@@ -295,14 +299,15 @@ TEST_P(MapReuseRunTest, SavedMapLocalisesEveryFrameOfTheSameCut) {
   const eval::SlamRunReport localize = eval::RunSlam(options);
   const nlohmann::json& map = localize.json["map"];
   EXPECT_TRUE(map["loaded"].get<bool>() && map["localize"].get<bool>());
-  EXPECT_EQ(map["localised_frames"].get<int>(), kFrames);
+  EXPECT_EQ(map["localised_frames"].get<int>(), Frames());
   EXPECT_EQ(map["loaded_keyframes"].get<int>(), mapping.run.keyframes);
   EXPECT_EQ(localize.run.keyframes, mapping.run.keyframes);
   EXPECT_EQ(localize.run.map_points, mapping.run.map_points);
   ASSERT_TRUE(localize.ate.has_value() && mapping.ate.has_value());
-  // As accurate as the map it localises in (orb 0.0155 -> 0.0164 m, paper 0.0219 -> 0.0216 m)...
-  EXPECT_LE(localize.ate->translation_m.rmse, 1.1 * mapping.ate->translation_m.rmse);
-  // ...and for orb, whose map of this cut is good enough, within issue 19's bar.
+  // As accurate as the map it localises in (orb 0.0189 -> 0.0184 m: with ORB-SLAM's local map,
+  // which mixes the passes, 0.0221 m; paper 0.0219 -> 0.0216 m)...
+  EXPECT_LE(localize.ate->translation_m.rmse, 1.05 * mapping.ate->translation_m.rmse);
+  // ...and for orb within issue 19's bar.
   if (GetParam() == "orb") {
     EXPECT_LE(localize.ate->translation_m.rmse, 0.02);
   }

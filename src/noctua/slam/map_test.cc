@@ -127,5 +127,44 @@ TEST(CulledKeyFramePosesTest, CulledKeyFramesFollowTheLatestGoodKeyFrameBeforeTh
   EXPECT_TRUE(keyframes[0]->pose_cw().isApprox(first, 1e-15));
 }
 
+// Keyframes along the x axis, all looking ahead (+z) but one turned 60 degrees about y, one
+// culled and two at the same distance: of those looking within 30 degrees of the pose's axis, the
+// nearest centres come first, equal distances in id order; turned and culled ones never come.
+TEST(NearestViewpointsTest, NearestCentresAmongKeyFramesLookingTheSameWay) {
+  const geometry::PinholeCamera camera = testing::TestCamera();
+  const std::vector<cv::KeyPoint> keypoints = {cv::KeyPoint(100.0f, 100.0f, 31.0f)};
+  const cv::Mat depth(480, 640, CV_32F, cv::Scalar(2.0f));
+  auto features = std::make_shared<const FrameFeatures>(
+      keypoints, cv::Mat(1, 32, CV_8U, cv::Scalar(0)), depth, camera, 40.0, 0.1);
+  Map map;
+  const auto add = [&](double x, double turn_deg) {
+    Frame frame(static_cast<long>(map.all_keyframes().size()), 0.0, features);
+    const geometry::Pose pose_wc = geometry::MakePose(
+        Eigen::Quaterniond(Eigen::AngleAxisd(turn_deg * M_PI / 180.0, Eigen::Vector3d::UnitY())),
+        Eigen::Vector3d(x, 0.0, 0.0));
+    frame.pose_cw = pose_wc.inverse();
+    return map.AddKeyFrame(frame);
+  };
+  KeyFrame* far = add(1.0, 0.0);
+  KeyFrame* right = add(0.3, 10.0);
+  KeyFrame* turned = add(0.0, 60.0);
+  KeyFrame* culled = add(0.05, 0.0);
+  KeyFrame* left = add(-0.3, -20.0);
+  KeyFrame* near = add(0.1, 0.0);
+  culled->SetBad();
+
+  const geometry::Pose pose_cw = geometry::Pose::Identity();
+  const double half_angle = 30.0 * M_PI / 180.0;
+  EXPECT_EQ(NearestViewpoints(map, pose_cw, half_angle, 10),
+            (std::vector<KeyFrame*>{near, right, left, far}));
+  EXPECT_EQ(NearestViewpoints(map, pose_cw, half_angle, 2), (std::vector<KeyFrame*>{near, right}));
+  EXPECT_TRUE(NearestViewpoints(map, pose_cw, half_angle, 0).empty());
+  // A wider gate lets the turned keyframe in, nearest of all.
+  EXPECT_EQ(NearestViewpoints(map, pose_cw, 70.0 * M_PI / 180.0, 1).front(), turned);
+  // Seen from the turned pose, only the turned keyframe looks the same way.
+  EXPECT_EQ(NearestViewpoints(map, turned->pose_cw(), half_angle, 10),
+            (std::vector<KeyFrame*>{turned}));
+}
+
 }  // namespace
 }  // namespace noctua::slam

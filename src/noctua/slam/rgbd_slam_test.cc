@@ -745,6 +745,13 @@ TEST_F(RgbdSlamTest, BadConfigAndBadDataFailClearly) {
   EXPECT_THAT(
       error_of([&] { LoadSlamSetup(write(camera + "slam:\n  max_coasting_frames: -1\n")); }),
       HasSubstr("max_coasting_frames must not be negative"));
+  EXPECT_EQ(defaults.localisation_keyframes, 6);
+  EXPECT_EQ(LoadSlamSetup(write(camera + "slam:\n  localisation_keyframes: 0\n"))
+                .options.localisation_keyframes,
+            0);
+  EXPECT_THAT(
+      error_of([&] { LoadSlamSetup(write(camera + "slam:\n  localisation_keyframes: -2\n")); }),
+      HasSubstr("localisation_keyframes must not be negative"));
   EXPECT_THAT(error_of([&] {
                 LoadSlamSetup(write(camera + "slam:\n  motion_prior_outlier_sigmas: -1\n"));
               }),

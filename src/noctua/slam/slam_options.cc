@@ -59,6 +59,7 @@ void SlamOptions::Check() const {
   CheckOption(keyframe_pause_after_relocalisation >= 0,
               "slam: keyframe_pause_after_relocalisation must not be negative");
   CheckOption(relocalisation_candidates >= 1, "slam: relocalisation_candidates must be >= 1");
+  CheckOption(localisation_keyframes >= 0, "slam: localisation_keyframes must not be negative");
   temporal_denoise.Check();
   CheckOption(local_ba_iterations >= 1, "slam: local_ba_iterations must be >= 1");
   CheckOption(local_ba_max_covisibles >= 0, "slam: local_ba_max_covisibles must be >= 0");
@@ -108,6 +109,7 @@ void ReadSlamSection(const YAML::Node& root, const std::string& source, SlamOpti
                                                "loop_min_inliers",
                                                "probation_for_new_points",
                                                "final_ba_iterations",
+                                               "localisation_keyframes",
                                                "temporal_denoise"};
   for (const auto& entry : section) {
     const auto key = entry.first.as<std::string>();
@@ -128,6 +130,7 @@ void ReadSlamSection(const YAML::Node& root, const std::string& source, SlamOpti
   io::ReadSetting(section, "loop_min_inliers", source, options.loop_closing.min_loop_inliers);
   io::ReadSetting(section, "probation_for_new_points", source, options.probation_for_new_points);
   io::ReadSetting(section, "final_ba_iterations", source, options.final_ba_iterations);
+  io::ReadSetting(section, "localisation_keyframes", source, options.localisation_keyframes);
   io::ReadSetting(section, "temporal_denoise", source, options.temporal_denoise.enabled);
 }
 

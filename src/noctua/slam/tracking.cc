@@ -19,6 +19,29 @@ namespace {
 constexpr long kOdometryPointId = -1;
 constexpr long kKeyFramePointId = -2;
 
+// ORB-SLAM's local map: the keyframes that see the frame's points (`counts`), and for each the
+// best covisible keyframe not yet among them.
+std::vector<KeyFrame*> SharingKeyFrames(const std::map<KeyFrame*, int, KeyFrameIdLess>& counts) {
+  std::vector<KeyFrame*> keyframes;
+  std::set<KeyFrame*, KeyFrameIdLess> included;
+  for (const auto& [keyframe, count] : counts) {
+    if (keyframe->bad()) continue;
+    keyframes.push_back(keyframe);
+    included.insert(keyframe);
+  }
+  constexpr std::size_t kMaxLocalKeyFrames = 80;
+  const std::size_t first_ring = keyframes.size();
+  for (std::size_t k = 0; k < first_ring && keyframes.size() < kMaxLocalKeyFrames; ++k) {
+    for (KeyFrame* neighbour : keyframes[k]->BestCovisibles(10)) {
+      if (included.insert(neighbour).second) {
+        keyframes.push_back(neighbour);
+        break;
+      }
+    }
+  }
+  return keyframes;
+}
+
 }  // namespace
 
 const char* TrackingStateName(TrackingState state) {
@@ -521,29 +544,25 @@ void Tracker::UpdateLocalMap() {
     for (const auto& [keyframe, index] : point->observations()) ++counts[keyframe];
   }
   if (counts.empty()) return;
-  local_keyframes_.clear();
-  std::set<KeyFrame*, KeyFrameIdLess> included;
   KeyFrame* best = nullptr;
   int best_count = 0;
   for (const auto& [keyframe, count] : counts) {
-    if (keyframe->bad()) continue;
-    if (count > best_count) {
+    if (!keyframe->bad() && count > best_count) {
       best_count = count;
       best = keyframe;
     }
-    local_keyframes_.push_back(keyframe);
-    included.insert(keyframe);
   }
-  constexpr std::size_t kMaxLocalKeyFrames = 80;
-  const std::size_t first_ring = local_keyframes_.size();
-  for (std::size_t k = 0; k < first_ring && local_keyframes_.size() < kMaxLocalKeyFrames; ++k) {
-    for (KeyFrame* neighbour : local_keyframes_[k]->BestCovisibles(10)) {
-      if (included.insert(neighbour).second) {
-        local_keyframes_.push_back(neighbour);
-        break;
-      }
-    }
+  local_keyframes_.clear();
+  // A finished map holds a place's points from every pass over it, each pass's with its drift,
+  // and the frame's matches lead to all of them: localising, the keyframes taken nearest to the
+  // frame's viewpoint make the local map instead (SlamOptions::localisation_keyframes).
+  if (localize_ && options_.localisation_keyframes > 0) {
+    const geometry::PinholeCamera& camera = frame.features->camera();
+    const double half_field_of_view = std::atan(0.5 * camera.width() / camera.fx());
+    local_keyframes_ =
+        NearestViewpoints(map_, frame.pose_cw, half_field_of_view, options_.localisation_keyframes);
   }
+  if (local_keyframes_.empty()) local_keyframes_ = SharingKeyFrames(counts);
   if (best != nullptr) reference_ = best;
 
   local_points_.clear();
