@@ -86,15 +86,19 @@ TEST_F(MapReclaimTest, PointsLeftByACulledKeyFrameAreFreed) {
   for (MapPoint* point : first_->map_points()) EXPECT_EQ(point, nullptr);
 }
 
+// Features of one keypoint at 2 m, for keyframes whose poses alone matter.
+std::shared_ptr<const FrameFeatures> OneKeyPointFeatures() {
+  const std::vector<cv::KeyPoint> keypoints = {cv::KeyPoint(100.0f, 100.0f, 31.0f)};
+  const cv::Mat depth(480, 640, CV_32F, cv::Scalar(2.0f));
+  return std::make_shared<const FrameFeatures>(keypoints, cv::Mat(1, 32, CV_8U, cv::Scalar(0)),
+                                               depth, testing::TestCamera(), 40.0, 0.1);
+}
+
 // Keyframes 0-3 with 2 and 3 culled: when the good ones move, each culled keyframe keeps its
 // pose relative to the latest good one before it (here keyframe 1 for both), and nothing else
 // moves.
 TEST(CulledKeyFramePosesTest, CulledKeyFramesFollowTheLatestGoodKeyFrameBeforeThem) {
-  const geometry::PinholeCamera camera = testing::TestCamera();
-  const std::vector<cv::KeyPoint> keypoints = {cv::KeyPoint(100.0f, 100.0f, 31.0f)};
-  const cv::Mat depth(480, 640, CV_32F, cv::Scalar(2.0f));
-  auto features = std::make_shared<const FrameFeatures>(
-      keypoints, cv::Mat(1, 32, CV_8U, cv::Scalar(0)), depth, camera, 40.0, 0.1);
+  const auto features = OneKeyPointFeatures();
   Map map;
   std::vector<KeyFrame*> keyframes;
   for (int i = 0; i < 4; ++i) {
@@ -131,11 +135,7 @@ TEST(CulledKeyFramePosesTest, CulledKeyFramesFollowTheLatestGoodKeyFrameBeforeTh
 // culled and two at the same distance: of those looking within 30 degrees of the pose's axis, the
 // nearest centres come first, equal distances in id order; turned and culled ones never come.
 TEST(NearestViewpointsTest, NearestCentresAmongKeyFramesLookingTheSameWay) {
-  const geometry::PinholeCamera camera = testing::TestCamera();
-  const std::vector<cv::KeyPoint> keypoints = {cv::KeyPoint(100.0f, 100.0f, 31.0f)};
-  const cv::Mat depth(480, 640, CV_32F, cv::Scalar(2.0f));
-  auto features = std::make_shared<const FrameFeatures>(
-      keypoints, cv::Mat(1, 32, CV_8U, cv::Scalar(0)), depth, camera, 40.0, 0.1);
+  const auto features = OneKeyPointFeatures();
   Map map;
   const auto add = [&](double x, double turn_deg) {
     Frame frame(static_cast<long>(map.all_keyframes().size()), 0.0, features);
