@@ -319,8 +319,8 @@ void LoopCloser::Correct(KeyFrame* keyframe, const LoopMatch& match, Map& map,
   }
   OptimizeEssentialGraph(map, match.loop, original, new_links);
   if (options_.loop_closing.global_ba_iterations > 0) {
-    GlobalBundleAdjustment(map.KeyFrames(), pyramid_, options_.bf,
-                           options_.loop_closing.global_ba_iterations);
+    GlobalBundleAdjustment(KeyFramesToAdjust(map, options_.min_tracked_inliers), pyramid_,
+                           options_.bf, options_.loop_closing.global_ba_iterations);
   }
   culled.Restore();
   loop_edges_.emplace_back(keyframe, match.loop);

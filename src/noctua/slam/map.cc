@@ -290,6 +290,14 @@ std::vector<const MapPoint*> Map::MapPoints() const {
   return good;
 }
 
+std::vector<KeyFrame*> KeyFramesToAdjust(const Map& map, int min_points) {
+  std::vector<KeyFrame*> adjusted;
+  for (KeyFrame* keyframe : map.KeyFrames()) {
+    if (keyframe->TrackedMapPoints(2) >= min_points) adjusted.push_back(keyframe);
+  }
+  return adjusted;
+}
+
 std::vector<KeyFrame*> NearestViewpoints(const Map& map, const geometry::Pose& pose_cw,
                                          double max_axis_angle_rad, int count) {
   // Rows of the world-to-camera rotation are the camera's axes in the world: row 2 looks ahead.

@@ -205,6 +205,13 @@ class Map {
   friend class MapFile;  // map_io.h: saves the good points in id order
 };
 
+// The good keyframes that a bundle adjustment of the whole map frees: those holding at least
+// `min_points` map points of weighted observation count 2 or more (TrackedMapPoints(2)). One that
+// holds fewer (made from few but certain points, in the dark or among people) is held where
+// tracking put it: freed, its few observations, some of them wrong, can pull it centimetres away,
+// and the frames that refer to it with it (docs/slam.md, "Adjusting the whole map at the end").
+std::vector<KeyFrame*> KeyFramesToAdjust(const Map& map, int min_points);
+
 // Up to `count` good keyframes taken from the viewpoints nearest to the camera pose `pose_cw`:
 // of those whose optical axis is within `max_axis_angle_rad` of the pose's, the camera centres
 // closest first (ties by id). A keyframe turned further away sees another part of the scene,

@@ -75,6 +75,16 @@ TEST_F(MapReclaimTest, FreesCulledPointsThatNothingHolds) {
   EXPECT_EQ(added->id(), kPoints);
 }
 
+// Both keyframes hold six points seen twice (with depth): an adjustment of the whole map frees
+// them when six are asked for, holds them once a point is culled.
+TEST_F(MapReclaimTest, KeyFramesHoldingTooFewPointsAreNotAdjusted) {
+  EXPECT_EQ(KeyFramesToAdjust(map_, kPoints), (std::vector<KeyFrame*>{first_, second_}));
+  EXPECT_TRUE(KeyFramesToAdjust(map_, kPoints + 1).empty());
+  points_[0]->SetBad();
+  EXPECT_TRUE(KeyFramesToAdjust(map_, kPoints).empty());
+  EXPECT_EQ(KeyFramesToAdjust(map_, kPoints - 1), (std::vector<KeyFrame*>{first_, second_}));
+}
+
 // A culled keyframe gives its observations back: the points it leaves with one observation are
 // culled (ORB-SLAM's rule), and freed by the next pass; the keyframe's slots are empty.
 TEST_F(MapReclaimTest, PointsLeftByACulledKeyFrameAreFreed) {

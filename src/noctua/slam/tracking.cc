@@ -876,16 +876,8 @@ double Tracker::AdjustWholeMap(int iterations, int min_points) {
   if (localize_) throw Error("slam: a localisation run leaves its map as loaded: no adjustment");
   FinishMapping();
   const Stopwatch watch;
-  // A keyframe that holds fewer map points than a frame needs to be tracked (one made from few
-  // but certain points, in the dark or among people) is held where tracking put it: freed with
-  // everything else, its few observations, some of them wrong, can pull it centimetres away, and
-  // the frames that refer to it with it (docs/slam.md).
-  std::vector<KeyFrame*> adjusted;
-  for (KeyFrame* keyframe : map_.KeyFrames()) {
-    if (keyframe->TrackedMapPoints(2) >= min_points) adjusted.push_back(keyframe);
-  }
   const CulledKeyFramePoses culled(map_);
-  GlobalBundleAdjustment(adjusted, pyramid_, options_.bf, iterations);
+  GlobalBundleAdjustment(KeyFramesToAdjust(map_, min_points), pyramid_, options_.bf, iterations);
   culled.Restore();
   return watch.ElapsedMs();
 }

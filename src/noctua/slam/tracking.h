@@ -90,10 +90,9 @@ class Tracker {
   // run: frames tracked after it are tracked against the adjusted map.
   double FinishRun();
   // FinishMapping, then the bundle adjustment of the whole map for at most `iterations`, keyframe
-  // 0 and the keyframes
-  // that hold fewer than `min_points` map points (KeyFrame::TrackedMapPoints(2)) held fixed; the
-  // culled keyframes follow (CulledKeyFramePoses). Returns its ms. Throws noctua::Error while
-  // localising.
+  // 0 and the keyframes that hold fewer than `min_points` map points held fixed
+  // (KeyFramesToAdjust); the culled keyframes follow (CulledKeyFramePoses). Returns its ms.
+  // Throws noctua::Error while localising.
   double AdjustWholeMap(int iterations, int min_points);
 
   // Starts from a saved map (map_io.h) instead of a new one, before the first frame: that frame
