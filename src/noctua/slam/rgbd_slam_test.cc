@@ -117,7 +117,7 @@ TEST_F(RgbdSlamTest, TracksEveryFrameWithTheBundleAdjustmentInTheBackground) {
 // keyframes move, but for those holding fewer points than the bar (here the median count, so
 // that some are held), which stay exactly where tracking put them; the finished trajectory
 // follows. By default (the bar is min_tracked_inliers) it brings these frames closer to the
-// ground truth (measured 0.0127 against 0.0145 m).
+// ground truth (measured 0.0104 against 0.0125 m, the frames between keyframes refined in both).
 TEST_F(RgbdSlamTest, AdjustsTheWholeMapAtTheEndAndTheTrajectoryFollows) {
   const auto slam_with = [](int final_ba_iterations) {
     SlamOptions options = setup_->options;
@@ -175,6 +175,56 @@ TEST_F(RgbdSlamTest, AdjustsTheWholeMapAtTheEndAndTheTrajectoryFollows) {
   std::cerr << "ATE without / with the final adjustment: " << ate(none.trajectory) << " / "
             << ate(adjusted.trajectory) << " m; held " << held << ", moved " << moved << "\n";
   EXPECT_LT(ate(adjusted.trajectory), ate(none.trajectory));
+}
+
+// Frames between keyframes re-optimised against the map once 4 keyframes followed them
+// (SlamOptions::refine_frames_after_keyframes): no more frames wait than the bound (4 keyframes'
+// worth: 4 x max_frames_between_keyframes), none once the run has returned, keyframes' frames
+// keep their poses, and the trajectory is closer to the ground truth (measured 0.0104 against
+// 0.0127 m without).
+TEST_F(RgbdSlamTest, RefinesTheFramesBetweenKeyFramesAgainstTheMap) {
+  const auto run_with = [](int refine_after, int* most_waiting, std::vector<bool>* keyframe) {
+    SlamOptions options = setup_->options;
+    options.refine_frames_after_keyframes = refine_after;
+    RgbdSlam slam(setup_->camera.Camera(), Orb(*setup_), options);
+    RunOptions run_options;
+    run_options.max_frames = 100;
+    run_options.progress = [&](int, int, const FrameOutcome& outcome) {
+      *most_waiting = std::max(*most_waiting, slam.tracker().unrefined_frames());
+      keyframe->push_back(outcome.new_keyframe);
+    };
+    SequenceRun run = RunSequence(slam, *sequence_, setup_->camera.depth_factor, run_options);
+    EXPECT_EQ(slam.tracker().unrefined_frames(), 0);
+    return run;
+  };
+  int most_waiting = 0;
+  int never_waiting = 0;
+  std::vector<bool> keyframe;
+  std::vector<bool> unused;
+  const SequenceRun refined = run_with(4, &most_waiting, &keyframe);
+  const SequenceRun tracked = run_with(0, &never_waiting, &unused);
+  EXPECT_EQ(never_waiting, 0);
+  EXPECT_GT(most_waiting, 4);
+  EXPECT_LE(most_waiting, 4 * setup_->options.max_frames_between_keyframes + 1);
+  ASSERT_EQ(refined.trajectory.size(), 100u);
+  ASSERT_EQ(tracked.trajectory.size(), 100u);
+  int frames_moved = 0;
+  for (std::size_t i = 0; i < refined.trajectory.size(); ++i) {
+    const double shift = (refined.trajectory.poses()[i].pose.translation() -
+                          tracked.trajectory.poses()[i].pose.translation())
+                             .norm();
+    if (keyframe[i]) {
+      EXPECT_LT(shift, 1e-9) << "frame " << i << " made a keyframe";
+    }
+    frames_moved += shift > 1e-5 ? 1 : 0;
+  }
+  EXPECT_GT(frames_moved, 50);
+  const auto ate = [&](const io::Trajectory& trajectory) {
+    return eval::ComputeAte(sequence_->ground_truth(), trajectory).translation_m.rmse;
+  };
+  std::cerr << "ATE refined / as tracked: " << ate(refined.trajectory) << " / "
+            << ate(tracked.trajectory) << " m\n";
+  EXPECT_LT(ate(refined.trajectory), 0.9 * ate(tracked.trajectory));
 }
 
 // Mapping stage by stage over the frames after each keyframe (what `noctua slam` does): with a
@@ -745,6 +795,14 @@ TEST_F(RgbdSlamTest, BadConfigAndBadDataFailClearly) {
   EXPECT_THAT(
       error_of([&] { LoadSlamSetup(write(camera + "slam:\n  max_coasting_frames: -1\n")); }),
       HasSubstr("max_coasting_frames must not be negative"));
+  EXPECT_EQ(defaults.refine_frames_after_keyframes, 4);
+  EXPECT_EQ(LoadSlamSetup(write(camera + "slam:\n  refine_frames_after_keyframes: 0\n"))
+                .options.refine_frames_after_keyframes,
+            0);
+  EXPECT_THAT(error_of([&] {
+                LoadSlamSetup(write(camera + "slam:\n  refine_frames_after_keyframes: -1\n"));
+              }),
+              HasSubstr("refine_frames_after_keyframes must not be negative"));
   EXPECT_EQ(defaults.localisation_keyframes, 6);
   EXPECT_EQ(LoadSlamSetup(write(camera + "slam:\n  localisation_keyframes: 0\n"))
                 .options.localisation_keyframes,

@@ -47,6 +47,8 @@ void SlamOptions::Check() const {
   CheckOption(min_certain_inliers >= 6 && min_certain_inliers <= min_tracked_inliers,
               "slam: min_certain_inliers must be in [6, min_tracked_inliers]");
   CheckOption(final_ba_iterations >= 0, "slam: final_ba_iterations must not be negative");
+  CheckOption(refine_frames_after_keyframes >= 0,
+              "slam: refine_frames_after_keyframes must not be negative");
   CheckOption(certain_sigma_ratio >= 0.0, "slam: certain_sigma_ratio must not be negative");
   CheckOption(motion_prior_acceleration_mps2 >= 0.0,
               "slam: motion_prior_acceleration_mps2 must not be negative");
@@ -109,6 +111,7 @@ void ReadSlamSection(const YAML::Node& root, const std::string& source, SlamOpti
                                                "loop_min_inliers",
                                                "probation_for_new_points",
                                                "final_ba_iterations",
+                                               "refine_frames_after_keyframes",
                                                "localisation_keyframes",
                                                "temporal_denoise"};
   for (const auto& entry : section) {
@@ -130,6 +133,8 @@ void ReadSlamSection(const YAML::Node& root, const std::string& source, SlamOpti
   io::ReadSetting(section, "loop_min_inliers", source, options.loop_closing.min_loop_inliers);
   io::ReadSetting(section, "probation_for_new_points", source, options.probation_for_new_points);
   io::ReadSetting(section, "final_ba_iterations", source, options.final_ba_iterations);
+  io::ReadSetting(section, "refine_frames_after_keyframes", source,
+                  options.refine_frames_after_keyframes);
   io::ReadSetting(section, "localisation_keyframes", source, options.localisation_keyframes);
   io::ReadSetting(section, "temporal_denoise", source, options.temporal_denoise.enabled);
 }

@@ -19,6 +19,11 @@ namespace {
 constexpr long kOdometryPointId = -1;
 constexpr long kKeyFramePointId = -2;
 
+// Waiting frames re-optimised after each frame at most (RefineTrackedFrames): more than one, so
+// that the queue shrinks after a keyframe has made a stretch of frames due at once, few enough
+// (1.4-2 ms each) that no frame waits long for them.
+constexpr int kFramesRefinedPerFrame = 3;
+
 // ORB-SLAM's local map: the keyframes that see the frame's points (`counts`), and for each the
 // best covisible keyframe not yet among them.
 std::vector<KeyFrame*> SharingKeyFrames(const std::map<KeyFrame*, int, KeyFrameIdLess>& counts) {
@@ -165,6 +170,14 @@ TrackResult Tracker::Track(Frame frame) {
     record.coasted = coasted;
   }
   records_.push_back(record);
+  if (ok && !localize_ && !result.new_keyframe && options_.refine_frames_after_keyframes > 0) {
+    HoldForRefinement(records_.size() - 1);
+  }
+  if (!unrefined_.empty()) {
+    const Stopwatch refine_watch;
+    RefineTrackedFrames(kFramesRefinedPerFrame);
+    result.stage_ms["mapping"] += refine_watch.ElapsedMs();
+  }
   // A lost frame does not become the last frame: the motion model and relocalisation compare
   // with the last frame that was tracked.
   if (ok) last_ = std::move(current_);
@@ -213,6 +226,7 @@ void Tracker::ReclaimMapPoints() {
   for (const Frame* frame : {last_.get(), current_.get()}) {
     if (frame != nullptr) held.push_back(&frame->map_points);
   }
+  for (const UnrefinedFrame& waiting : unrefined_) held.push_back(&waiting.frame.map_points);
   map_.ReclaimMapPoints(held);
 }
 
@@ -812,11 +826,48 @@ void Tracker::CreateNewKeyFrame() {
     }
   }
   MapKeyFrame(keyframe);
+  ++keyframes_made_;
   reference_ = last_keyframe_ = keyframe;
   last_keyframe_frame_id_ = frame.id;
   // Local bundle adjustment (or a loop closed) moved the keyframe: the frame keeps its pose
   // relative to it.
   frame.pose_cw = keyframe->pose_cw();
+}
+
+void Tracker::HoldForRefinement(std::size_t record) {
+  Frame held(current_->id, current_->timestamp, current_->features);
+  held.map_points = current_->map_points;  // inliers that are map points, by now
+  unrefined_.push_back({record, keyframes_made_, std::move(held)});
+}
+
+void Tracker::RefineTrackedFrames(std::optional<int> at_most) {
+  // Without keyframes (a camera held still) frames would wait for ever: past this many, the
+  // oldest is due anyway.
+  const std::size_t max_waiting = static_cast<std::size_t>(options_.refine_frames_after_keyframes) *
+                                  static_cast<std::size_t>(options_.max_frames_between_keyframes);
+  for (int refined = 0; !unrefined_.empty() && (!at_most || refined < *at_most); ++refined) {
+    UnrefinedFrame& oldest = unrefined_.front();
+    const bool due =
+        keyframes_made_ - oldest.keyframes_before >= options_.refine_frames_after_keyframes ||
+        unrefined_.size() > max_waiting;
+    if (at_most && !due) break;
+    FrameRecord& record = records_[oldest.record];
+    Frame& frame = oldest.frame;
+    int matches = 0;
+    for (MapPoint*& point : frame.map_points) {
+      if (point != nullptr && point->bad()) point = point->replaced();
+      if (point != nullptr && point->bad()) point = nullptr;
+      matches += point != nullptr ? 1 : 0;
+    }
+    // Fewer than a frame needs to be tracked: the pose stays as tracking made it, with its prior.
+    if (matches >= options_.min_tracked_inliers && record.reference != nullptr) {
+      frame.pose_cw = *record.PoseCw();
+      if (OptimizePose(frame, pyramid_, options_.bf) >= options_.min_tracked_inliers) {
+        record.pose_c_r = frame.pose_cw * record.reference->pose_cw().inverse();
+      }
+    }
+    unrefined_.pop_front();
+  }
 }
 
 void Tracker::MapKeyFrame(KeyFrame* keyframe) {
@@ -867,9 +918,13 @@ void Tracker::FinishMapping() {
 double Tracker::FinishRun() {
   if (localize_ || options_.final_ba_iterations == 0) {
     FinishMapping();
+    RefineTrackedFrames(std::nullopt);
     return 0.0;
   }
-  return AdjustWholeMap(options_.final_ba_iterations, options_.min_tracked_inliers);
+  const double adjustment_ms =
+      AdjustWholeMap(options_.final_ba_iterations, options_.min_tracked_inliers);
+  RefineTrackedFrames(std::nullopt);
+  return adjustment_ms;
 }
 
 double Tracker::AdjustWholeMap(int iterations, int min_points) {

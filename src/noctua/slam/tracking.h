@@ -86,8 +86,9 @@ class Tracker {
   // saving the map at the end of a run.
   void FinishMapping();
   // FinishMapping, then the bundle adjustment of the whole map (SlamOptions::final_ba_iterations;
-  // never while localising). Returns the ms the adjustment took (0 when none ran). The end of a
-  // run: frames tracked after it are tracked against the adjusted map.
+  // never while localising), then the frames still waiting are re-optimised against it
+  // (SlamOptions::refine_frames_after_keyframes). Returns the ms the adjustment took (0 when none
+  // ran). The end of a run: frames tracked after it are tracked against the adjusted map.
   double FinishRun();
   // FinishMapping, then the bundle adjustment of the whole map for at most `iterations`, keyframe
   // 0 and the keyframes that hold fewer than `min_points` map points held fixed
@@ -111,6 +112,9 @@ class Tracker {
   const LoopCloser& loop_closer() const { return loop_closer_; }
   const std::vector<FrameRecord>& records() const { return records_; }
   TrackingState state() const { return state_; }
+  // Tracked frames still waiting to be re-optimised against the map
+  // (SlamOptions::refine_frames_after_keyframes).
+  int unrefined_frames() const { return static_cast<int>(unrefined_.size()); }
 
  private:
   bool Initialise(Frame& frame);
@@ -133,6 +137,11 @@ class Tracker {
   void LiftKeyFrameDepth(KeyFrame* keyframe, long frame_id);
   void SearchLocalPoints();
   bool InFrustum(MapPoint* point, double min_view_cos) const;
+  // SlamOptions::refine_frames_after_keyframes: the current frame, tracked, waits with its
+  // matches; RefineTrackedFrames re-optimises the oldest waiting frames that are due (all of
+  // them when `at_most` is none) and lets their features go.
+  void HoldForRefinement(std::size_t record);
+  void RefineTrackedFrames(std::optional<int> at_most);
   bool NeedNewKeyFrame() const;
   bool AsCertainAsRecentFrames() const;
   // Where the camera should be if it kept its velocity (SlamOptions::motion_prior_*); none
@@ -199,6 +208,13 @@ class Tracker {
   // Live for one frame: visual odometry of the last frame, lifted keyframe depth (localising).
   std::vector<std::unique_ptr<MapPoint>> temporary_points_;
   std::vector<FrameRecord> records_;
+  struct UnrefinedFrame {
+    std::size_t record;     // in records_
+    long keyframes_before;  // keyframes_made_ when it was tracked
+    Frame frame;            // its features and the map points of its inliers
+  };
+  std::deque<UnrefinedFrame> unrefined_;
+  long keyframes_made_ = 0;
 };
 
 }  // namespace noctua::slam
