@@ -304,8 +304,9 @@ TEST_P(MapReuseRunTest, SavedMapLocalisesEveryFrameOfTheSameCut) {
   EXPECT_EQ(localize.run.keyframes, mapping.run.keyframes);
   EXPECT_EQ(localize.run.map_points, mapping.run.map_points);
   ASSERT_TRUE(localize.ate.has_value() && mapping.ate.has_value());
-  // As accurate as the map it localises in (orb 0.0189 -> 0.0184 m: with ORB-SLAM's local map,
-  // which mixes the passes, 0.0221 m; paper 0.0219 -> 0.0216 m)...
+  // As accurate as the map it localises in (orb 0.0177 -> 0.0184 m, the mapping run's frames
+  // between keyframes refined, a localising run's not; with ORB-SLAM's local map, which mixes
+  // the passes, 0.0221 m; paper 0.0257 -> 0.0206 m)...
   EXPECT_LE(localize.ate->translation_m.rmse, 1.05 * mapping.ate->translation_m.rmse);
   // ...and for orb within issue 19's bar.
   if (GetParam() == "orb") {

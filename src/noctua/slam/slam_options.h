@@ -148,7 +148,7 @@ struct SlamOptions {
   // the keyframes that see the frame's matched points (ORB-SLAM's, kept for mapping). A finished
   // map holds a place's points from every pass over it, each pass's with its own drift, and the
   // matched points lead to all of them; the mapping run's frames saw only the points made before
-  // them. On tum_fr1_rpy_200 (orb, five brightness scales) localising fell from 0.0223 to 0.0194 m
+  // them. On tum_fr1_rpy_200 (orb, five brightness scales) localising fell from 0.0224 to 0.0194 m
   // mean ATE, level with the mapping runs (docs/slam.md, "Saving and reusing a map"). 0: ORB-SLAM's
   // local map when localising too.
   int localisation_keyframes = 6;
@@ -176,7 +176,7 @@ struct SlamOptions {
   // stays bounded by those frames; the frames still waiting when the run ends follow the whole
   // map's adjustment. A frame left with fewer than min_tracked_inliers of its matches keeps its
   // tracked pose. On tum_fr1_rpy_200 (orb, five brightness scales) 4 took the mean ATE from
-  // 0.0194 to 0.0186 m (docs/slam.md, "The frames between keyframes"). 0: never.
+  // 0.0194 to 0.0187 m (docs/slam.md, "The frames between keyframes"). 0: never.
   int refine_frames_after_keyframes = 4;
   bool local_ba = true;  // off: map points are never refined (for comparison)
   // Solve each keyframe's local bundle adjustment on a thread of its own while tracking goes on
