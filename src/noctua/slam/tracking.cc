@@ -77,6 +77,7 @@ Tracker::Tracker(const SlamOptions& options)
 TrackResult Tracker::Track(Frame frame) {
   TrackResult result;
   current_ = std::make_unique<Frame>(std::move(frame));
+  tracked_prior_.reset();
   mapper_.CollectBundleAdjustment(/*wait=*/false);
   Stopwatch watch;
   bool ok = false;
@@ -642,9 +643,9 @@ bool Tracker::TrackLocalMap() {
   SearchLocalPoints();
   Frame& frame = *current_;
   RejectMovingMatches(true);
-  const std::optional<CentrePrior> prior = MotionPrior();
+  tracked_prior_ = MotionPrior();
   const std::vector<bool> on_probation = MatchesOnProbation();
-  OptimizePose(frame, pyramid_, options_.bf, prior ? &*prior : nullptr,
+  OptimizePose(frame, pyramid_, options_.bf, tracked_prior_ ? &*tracked_prior_ : nullptr,
                on_probation.empty() ? nullptr : &on_probation);
   inliers_ = 0;
   odometry_inliers_ = 0;
@@ -837,7 +838,10 @@ void Tracker::CreateNewKeyFrame() {
 void Tracker::HoldForRefinement(std::size_t record) {
   Frame held(current_->id, current_->timestamp, current_->features);
   held.map_points = current_->map_points;  // inliers that are map points, by now
-  unrefined_.push_back({record, keyframes_made_, std::move(held)});
+  std::optional<CentrePrior> prior = tracked_prior_;
+  // Kept in the reference keyframe's frame, so it moves with the keyframe as the map is adjusted.
+  if (prior) prior->centre = reference_->pose_cw() * prior->centre;
+  unrefined_.push_back({record, keyframes_made_, std::move(held), prior});
 }
 
 void Tracker::RefineTrackedFrames(std::optional<int> at_most) {
@@ -862,7 +866,10 @@ void Tracker::RefineTrackedFrames(std::optional<int> at_most) {
     // Fewer than a frame needs to be tracked: the pose stays as tracking made it, with its prior.
     if (matches >= options_.min_tracked_inliers && record.reference != nullptr) {
       frame.pose_cw = *record.PoseCw();
-      if (OptimizePose(frame, pyramid_, options_.bf) >= options_.min_tracked_inliers) {
+      std::optional<CentrePrior> prior = oldest.prior;
+      if (prior) prior->centre = record.reference->pose_cw().inverse() * prior->centre;
+      if (OptimizePose(frame, pyramid_, options_.bf, prior ? &*prior : nullptr) >=
+          options_.min_tracked_inliers) {
         record.pose_c_r = frame.pose_cw * record.reference->pose_cw().inverse();
       }
     }

@@ -202,6 +202,7 @@ class Tracker {
   // Inliers of the current frame that are the last frame's temporary depth points, not map points.
   int odometry_inliers_ = 0;
   PoseUncertainty uncertainty_;  // of the current frame's pose after local-map tracking
+  std::optional<CentrePrior> tracked_prior_;  // the current frame's MotionPrior, if it had one
   std::deque<PoseUncertainty> recent_uncertainty_;  // of the last tracked frames, oldest first
   std::vector<KeyFrame*> local_keyframes_;
   std::vector<MapPoint*> local_points_;
@@ -212,6 +213,9 @@ class Tracker {
     std::size_t record;     // in records_
     long keyframes_before;  // keyframes_made_ when it was tracked
     Frame frame;            // its features and the map points of its inliers
+    // The motion prior it was tracked with, its centre in the reference keyframe's frame: few
+    // matches (a fast turn) leave the pose to the prior, refined or not.
+    std::optional<CentrePrior> prior;
   };
   std::deque<UnrefinedFrame> unrefined_;
   long keyframes_made_ = 0;
