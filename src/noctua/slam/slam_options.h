@@ -172,11 +172,11 @@ struct SlamOptions {
   // A bundle adjustment refines keyframes only; every other frame keeps the pose tracking gave it
   // against the map as it was then. Once this many keyframes were made after a tracked frame,
   // its pose is optimised again against the map as it stands, from its own inlier matches (pose
-  // only, as tracking does, without the motion prior), and its features are let go, so memory
+  // only, with the motion prior it was tracked with), and its features are let go, so memory
   // stays bounded by those frames; the frames still waiting when the run ends follow the whole
   // map's adjustment. A frame left with fewer than min_tracked_inliers of its matches keeps its
   // tracked pose. On tum_fr1_rpy_200 (orb, five brightness scales) 4 took the mean ATE from
-  // 0.0194 to 0.0187 m (docs/slam.md, "The frames between keyframes"). 0: never.
+  // 0.0194 to 0.0188 m (docs/slam.md, "The frames between keyframes"). 0: never.
   int refine_frames_after_keyframes = 4;
   bool local_ba = true;  // off: map points are never refined (for comparison)
   // Solve each keyframe's local bundle adjustment on a thread of its own while tracking goes on
