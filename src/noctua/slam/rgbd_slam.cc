@@ -10,6 +10,7 @@
 #include <optional>
 #include <thread>
 
+#include "noctua/slam/trajectory_smoothing.h"
 #include "noctua/util/error.h"
 #include "noctua/util/timer.h"
 
@@ -84,6 +85,7 @@ TrackResult RgbdSlam::Track(Extracted extracted, bool advance_mapping) {
 io::Trajectory RgbdSlam::Trajectory() {
   FinishMapping();
   std::vector<io::StampedPose> poses;
+  std::vector<double> sigmas_m;           // of poses
   std::vector<io::StampedPose> measured;  // the frames tracked, not coasted
   std::vector<std::size_t> coasted;       // indices into poses
   for (const FrameRecord& record : tracker_.records()) {
@@ -96,6 +98,7 @@ io::Trajectory RgbdSlam::Trajectory() {
       measured.push_back(pose);
     }
     poses.push_back(pose);
+    sigmas_m.push_back(record.position_sigma_m);
   }
   // SlamOptions::bridge_coasted_frames: a coasted frame gets the pose interpolated in time between
   // the tracked frames around it (lost frames between have no pose); one after the last tracked
@@ -107,6 +110,9 @@ io::Trajectory RgbdSlam::Trajectory() {
           tracked.Interpolate(poses[i].timestamp, std::numeric_limits<double>::infinity());
       if (bridged) poses[i].pose = *bridged;
     }
+  }
+  if (options_.smooth_trajectory && options_.motion_prior_acceleration_mps2 > 0.0) {
+    SmoothTrajectory(poses, sigmas_m, options_.motion_prior_acceleration_mps2);
   }
   return io::Trajectory(std::move(poses));
 }

@@ -13,6 +13,7 @@
 #include <mutex>
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <optional>
 
 #include "noctua/eval/trajectory_error.h"
 #include "noctua/features/extractor_config.h"
@@ -54,12 +55,13 @@ class RgbdSlamTest : public ::testing::Test {
     delete sequence_;
     delete setup_;
   }
-  static SequenceRun Run(int frames, std::function<cv::Mat(int, const cv::Mat&)> transform = {}) {
+  static SequenceRun Run(int frames, std::function<cv::Mat(int, const cv::Mat&)> transform = {},
+                         std::optional<SlamOptions> slam_options = std::nullopt) {
     RunOptions options;
     options.max_frames = frames;
     options.transform_image = std::move(transform);
     return RunSequence(*sequence_, setup_->camera.depth_factor, setup_->camera.Camera(),
-                       Orb(*setup_), setup_->options, options);
+                       Orb(*setup_), slam_options.value_or(setup_->options), options);
   }
   static io::Sequence* sequence_;
   static SlamSetup* setup_;
@@ -181,13 +183,14 @@ TEST_F(RgbdSlamTest, AdjustsTheWholeMapAtTheEndAndTheTrajectoryFollows) {
 }
 
 // Runs the first `frames` frames with `method`, the frames between keyframes refined after
-// `refine_after` keyframes (0: never); `most_waiting` gets the most frames that waited at once,
-// `keyframe` whether each frame made a keyframe.
+// `refine_after` keyframes (0: never), the trajectory unsmoothed; `most_waiting` gets the most
+// frames that waited at once, `keyframe` whether each frame made a keyframe.
 SequenceRun RunRefined(const io::Sequence& sequence, const SlamSetup& setup,
                        const std::string& method, int frames, int refine_after,
                        int* most_waiting = nullptr, std::vector<bool>* keyframe = nullptr) {
   SlamOptions options = setup.options;
   options.refine_frames_after_keyframes = refine_after;
+  options.smooth_trajectory = false;
   RgbdSlam slam(setup.camera.Camera(), Method(method), options);
   RunOptions run_options;
   run_options.max_frames = frames;
@@ -250,6 +253,44 @@ TEST_F(RgbdSlamTest, RefinedFramesKeepTheMotionPriorTheyWereTrackedWith) {
   std::cerr << "ATE refined / as tracked: " << ate(refined.trajectory) << " / "
             << ate(tracked.trajectory) << " m\n";
   EXPECT_LT(ate(refined.trajectory), 1.05 * ate(tracked.trajectory));
+}
+
+// The finished trajectory's centres smoothed with the motion prior's acceleration
+// (SlamOptions::smooth_trajectory): tracking is the same, rotations are unchanged, the centres'
+// frame-to-frame jitter (second difference, RMS; the ground truth's is 1 mm) falls to less than
+// half, and the trajectory is closer to the ground truth (measured on these 100 frames: jitter 1.9
+// against 8.8 mm, ATE 0.0101 against 0.0111 m).
+TEST_F(RgbdSlamTest, SmoothsTheCentresOfTheFinishedTrajectory) {
+  SlamOptions unsmoothed_options = setup_->options;
+  unsmoothed_options.smooth_trajectory = false;
+  const SequenceRun smoothed = Run(100);
+  const SequenceRun unsmoothed = Run(100, {}, unsmoothed_options);
+  ASSERT_EQ(smoothed.trajectory.size(), 100u);
+  ASSERT_EQ(unsmoothed.trajectory.size(), 100u);
+  const auto jitter = [](const io::Trajectory& trajectory) {
+    const auto& poses = trajectory.poses();
+    double sum = 0.0;
+    for (std::size_t k = 1; k + 1 < poses.size(); ++k) {
+      sum += (poses[k - 1].pose.translation() - 2.0 * poses[k].pose.translation() +
+              poses[k + 1].pose.translation())
+                 .squaredNorm();
+    }
+    return std::sqrt(sum / static_cast<double>(poses.size() - 2));
+  };
+  for (std::size_t k = 0; k < 100; ++k) {
+    EXPECT_EQ(smoothed.frames[k].inliers, unsmoothed.frames[k].inliers) << k;
+    EXPECT_TRUE(smoothed.trajectory.poses()[k].pose.linear().isApprox(
+        unsmoothed.trajectory.poses()[k].pose.linear(), 1e-12))
+        << k;
+  }
+  const auto ate = [&](const io::Trajectory& trajectory) {
+    return eval::ComputeAte(sequence_->ground_truth(), trajectory).translation_m.rmse;
+  };
+  std::cerr << "jitter smoothed / unsmoothed: " << jitter(smoothed.trajectory) << " / "
+            << jitter(unsmoothed.trajectory) << " m; ATE " << ate(smoothed.trajectory) << " / "
+            << ate(unsmoothed.trajectory) << " m\n";
+  EXPECT_LT(jitter(smoothed.trajectory), 0.5 * jitter(unsmoothed.trajectory));
+  EXPECT_LT(ate(smoothed.trajectory), ate(unsmoothed.trajectory));
 }
 
 // Mapping stage by stage over the frames after each keyframe (what `noctua slam` does): with a
@@ -528,12 +569,16 @@ TEST_F(RgbdSlamTest, LookaheadSeesEveryFrameInOrderAheadOfItsExtraction) {
 
 // Twenty black frames: the first max_coasting_frames (10) get the motion model's pose, marked
 // as coasting with a confidence that worsens frame by frame; the rest have no pose; the first
-// frame after the stretch relocalises.
+// frame after the stretch relocalises. (The trajectory unsmoothed, so that the bridged poses are
+// exactly the interpolation.)
 TEST_F(RgbdSlamTest, RecoversAfterTwentyBlackFrames) {
-  const SequenceRun run = Run(90, [](int index, const cv::Mat& image) {
+  SlamOptions unsmoothed = setup_->options;
+  unsmoothed.smooth_trajectory = false;
+  const auto black = [](int index, const cv::Mat& image) {
     return index >= 40 && index < 60 ? cv::Mat(image.size(), image.type(), cv::Scalar::all(0))
                                      : image;
-  });
+  };
+  const SequenceRun run = Run(90, black, unsmoothed);
   const int coasting = SlamOptions().max_coasting_frames;
   ASSERT_EQ(coasting, 10);
   ASSERT_EQ(run.coasted_frames.size(), 10u);
@@ -574,7 +619,7 @@ TEST_F(RgbdSlamTest, RecoversAfterTwentyBlackFrames) {
 // Eight black frames: they coast on the motion model; once frame 48 is tracked again the
 // finished trajectory bridges them, each pose interpolated in time between frames 39 and 48,
 // which both ends measured; the prediction (bridge_coasted_frames off) is further from the
-// ground truth. Tracking itself is the same either way.
+// ground truth. Tracking itself is the same either way. (Trajectories unsmoothed, as above.)
 TEST_F(RgbdSlamTest, BridgesCoastedFramesBetweenTheTrackedFramesAroundThem) {
   const auto black = [](int index, const cv::Mat& image) {
     return index >= 40 && index < 48 ? cv::Mat(image.size(), image.type(), cv::Scalar::all(0))
@@ -584,6 +629,7 @@ TEST_F(RgbdSlamTest, BridgesCoastedFramesBetweenTheTrackedFramesAroundThem) {
   for (const bool bridge : {false, true}) {
     SlamOptions options = setup_->options;
     options.bridge_coasted_frames = bridge;
+    options.smooth_trajectory = false;
     RunOptions run_options;
     run_options.max_frames = 70;
     run_options.transform_image = black;

@@ -113,6 +113,7 @@ void ReadSlamSection(const YAML::Node& root, const std::string& source, SlamOpti
                                                "final_ba_iterations",
                                                "refine_frames_after_keyframes",
                                                "localisation_keyframes",
+                                               "smooth_trajectory",
                                                "temporal_denoise"};
   for (const auto& entry : section) {
     const auto key = entry.first.as<std::string>();
@@ -136,6 +137,7 @@ void ReadSlamSection(const YAML::Node& root, const std::string& source, SlamOpti
   io::ReadSetting(section, "refine_frames_after_keyframes", source,
                   options.refine_frames_after_keyframes);
   io::ReadSetting(section, "localisation_keyframes", source, options.localisation_keyframes);
+  io::ReadSetting(section, "smooth_trajectory", source, options.smooth_trajectory);
   io::ReadSetting(section, "temporal_denoise", source, options.temporal_denoise.enabled);
 }
 

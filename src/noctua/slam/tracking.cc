@@ -169,6 +169,7 @@ TrackResult Tracker::Track(Frame frame) {
     record.reference = reference_;
     record.pose_c_r = current_->pose_cw * reference_->pose_cw().inverse();
     record.coasted = coasted;
+    record.position_sigma_m = result.position_sigma_m;
   }
   records_.push_back(record);
   if (ok && !localize_ && !result.new_keyframe && options_.refine_frames_after_keyframes > 0) {

@@ -58,6 +58,7 @@ struct FrameRecord {
   double timestamp = 0.0;
   const KeyFrame* reference = nullptr;  // nullptr: not tracked
   bool coasted = false;                 // the motion model's pose (TrackingState::kCoasting)
+  double position_sigma_m = 0.0;        // TrackResult::position_sigma_m of the tracked pose
   geometry::Pose pose_c_r = geometry::Pose::Identity();
   // T_camera_world with the reference keyframe's pose as it is now; none when not tracked.
   std::optional<geometry::Pose> PoseCw() const {
