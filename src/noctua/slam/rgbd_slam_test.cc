@@ -856,6 +856,9 @@ TEST_F(RgbdSlamTest, BadConfigAndBadDataFailClearly) {
   EXPECT_FALSE(defaults.temporal_denoise.enabled);
   EXPECT_TRUE(LoadSlamSetup(write(camera + "slam:\n  temporal_denoise: true\n"))
                   .options.temporal_denoise.enabled);
+  EXPECT_TRUE(defaults.smooth_trajectory);
+  EXPECT_FALSE(LoadSlamSetup(write(camera + "slam:\n  smooth_trajectory: false\n"))
+                   .options.smooth_trajectory);
   EXPECT_TRUE(defaults.bridge_coasted_frames);
   const SlamOptions coasting =
       LoadSlamSetup(
