@@ -63,6 +63,10 @@ class RgbdSlamTest : public ::testing::Test {
     return RunSequence(*sequence_, setup_->camera.depth_factor, setup_->camera.Camera(),
                        Orb(*setup_), slam_options.value_or(setup_->options), options);
   }
+  // ATE RMSE (m) against the sequence's ground truth.
+  static double Ate(const io::Trajectory& trajectory) {
+    return eval::ComputeAte(sequence_->ground_truth(), trajectory).translation_m.rmse;
+  }
   static io::Sequence* sequence_;
   static SlamSetup* setup_;
 };
@@ -174,12 +178,9 @@ TEST_F(RgbdSlamTest, AdjustsTheWholeMapAtTheEndAndTheTrajectoryFollows) {
       RunSequence(*adjusted_slam, *sequence_, setup_->camera.depth_factor, run_options);
   EXPECT_GT(adjusted.final_ba_ms, 0.0);
   ASSERT_EQ(adjusted.trajectory.size(), 100u);
-  const auto ate = [&](const io::Trajectory& trajectory) {
-    return eval::ComputeAte(sequence_->ground_truth(), trajectory).translation_m.rmse;
-  };
-  std::cerr << "ATE without / with the final adjustment: " << ate(none.trajectory) << " / "
-            << ate(adjusted.trajectory) << " m; held " << held << ", moved " << moved << "\n";
-  EXPECT_LT(ate(adjusted.trajectory), ate(none.trajectory));
+  std::cerr << "ATE without / with the final adjustment: " << Ate(none.trajectory) << " / "
+            << Ate(adjusted.trajectory) << " m; held " << held << ", moved " << moved << "\n";
+  EXPECT_LT(Ate(adjusted.trajectory), Ate(none.trajectory));
 }
 
 // Runs the first `frames` frames with `method`, the frames between keyframes refined after
@@ -231,12 +232,9 @@ TEST_F(RgbdSlamTest, RefinesTheFramesBetweenKeyFramesAgainstTheMap) {
     frames_moved += shift > 1e-5 ? 1 : 0;
   }
   EXPECT_GT(frames_moved, 50);
-  const auto ate = [&](const io::Trajectory& trajectory) {
-    return eval::ComputeAte(sequence_->ground_truth(), trajectory).translation_m.rmse;
-  };
-  std::cerr << "ATE refined / as tracked: " << ate(refined.trajectory) << " / "
-            << ate(tracked.trajectory) << " m\n";
-  EXPECT_LT(ate(refined.trajectory), 0.9 * ate(tracked.trajectory));
+  std::cerr << "ATE refined / as tracked: " << Ate(refined.trajectory) << " / "
+            << Ate(tracked.trajectory) << " m\n";
+  EXPECT_LT(Ate(refined.trajectory), 0.9 * Ate(tracked.trajectory));
 }
 
 // fr1's fast turn (frames 44-51) tracked with `paper`: 44-58 inliers, the pose held by the motion
@@ -247,12 +245,9 @@ TEST_F(RgbdSlamTest, RefinedFramesKeepTheMotionPriorTheyWereTrackedWith) {
   const SequenceRun tracked = RunRefined(*sequence_, *setup_, "paper", 60, 0);
   ASSERT_EQ(refined.trajectory.size(), 60u);
   ASSERT_EQ(tracked.trajectory.size(), 60u);
-  const auto ate = [&](const io::Trajectory& trajectory) {
-    return eval::ComputeAte(sequence_->ground_truth(), trajectory).translation_m.rmse;
-  };
-  std::cerr << "ATE refined / as tracked: " << ate(refined.trajectory) << " / "
-            << ate(tracked.trajectory) << " m\n";
-  EXPECT_LT(ate(refined.trajectory), 1.05 * ate(tracked.trajectory));
+  std::cerr << "ATE refined / as tracked: " << Ate(refined.trajectory) << " / "
+            << Ate(tracked.trajectory) << " m\n";
+  EXPECT_LT(Ate(refined.trajectory), 1.05 * Ate(tracked.trajectory));
 }
 
 // The finished trajectory's centres smoothed with the motion prior's acceleration
@@ -283,14 +278,11 @@ TEST_F(RgbdSlamTest, SmoothsTheCentresOfTheFinishedTrajectory) {
         unsmoothed.trajectory.poses()[k].pose.linear(), 1e-12))
         << k;
   }
-  const auto ate = [&](const io::Trajectory& trajectory) {
-    return eval::ComputeAte(sequence_->ground_truth(), trajectory).translation_m.rmse;
-  };
   std::cerr << "jitter smoothed / unsmoothed: " << jitter(smoothed.trajectory) << " / "
-            << jitter(unsmoothed.trajectory) << " m; ATE " << ate(smoothed.trajectory) << " / "
-            << ate(unsmoothed.trajectory) << " m\n";
+            << jitter(unsmoothed.trajectory) << " m; ATE " << Ate(smoothed.trajectory) << " / "
+            << Ate(unsmoothed.trajectory) << " m\n";
   EXPECT_LT(jitter(smoothed.trajectory), 0.5 * jitter(unsmoothed.trajectory));
-  EXPECT_LT(ate(smoothed.trajectory), ate(unsmoothed.trajectory));
+  EXPECT_LT(Ate(smoothed.trajectory), Ate(unsmoothed.trajectory));
 }
 
 // Mapping stage by stage over the frames after each keyframe (what `noctua slam` does): with a
