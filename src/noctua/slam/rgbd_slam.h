@@ -55,7 +55,8 @@ class RgbdSlam {
 
   // T_world_camera of every tracked frame (lost frames and frames before the map exist are
   // left out rather than guessed), with the latest keyframe poses (after the bundle adjustment
-  // still solving in the background, if any: FinishMapping).
+  // still solving in the background, if any: FinishMapping), coasted frames bridged and the
+  // camera centres smoothed (SlamOptions::bridge_coasted_frames, smooth_trajectory).
   io::Trajectory Trajectory();
   // Lands the mapping still running in the background, so that the map is final (before saving
   // or reading it at the end of a run).
