@@ -32,6 +32,11 @@ struct AsyncMaskOptions {
   // finished by then (grown by its age in frames, either way), and the detector takes the newest
   // frame when it is free, at most every N-th, so its share of the processor falls under load.
   bool wait_for_detection = true;
+  // Where frames do not wait for detection, the detector runs at the lowest scheduling priority
+  // (Linux SCHED_IDLE): it takes only the processor time that loading, extraction and tracking
+  // leave, so a detection never delays a frame's pose; an older mask is carried meanwhile. On
+  // tum_fr1_rpy_200 replayed at 30 Hz on two cores it still ran on about every 3rd frame
+  // (docs/slam.md, "Latency in real time").
   void Check() const;
 };
 
