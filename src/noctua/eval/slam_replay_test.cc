@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <atomic>
 #include <set>
 
 #include "noctua/eval/slam_run.h"
@@ -132,6 +134,46 @@ TEST(SlamReplayTest, AReplayedFrameNeverWaitsForTheDetector) {
   const nlohmann::json& ahead = untimed.json["detection"];
   EXPECT_THAT(ahead["mode"].get<std::string>(), HasSubstr("submitted ahead"));
   EXPECT_EQ(ahead["frames_detected"].get<int>(), (kFrames + 2) / 3);
+}
+
+// Frames on demand, as a camera whose frames never run out would hand them, counting how many
+// were taken.
+class CountingCamera : public io::FrameSource {
+ public:
+  explicit CountingCamera(std::unique_ptr<io::FrameSource> frames) : frames_(std::move(frames)) {}
+  std::string Describe() const override { return "counting camera"; }
+  std::optional<std::size_t> size() const override { return frames_->size(); }
+  std::optional<io::SourceFrame> Next() override {
+    std::optional<io::SourceFrame> frame = frames_->Next();
+    if (frame) ++taken_;
+    return frame;
+  }
+  bool real_time() const override { return true; }
+  int taken() const { return taken_; }
+
+ private:
+  std::unique_ptr<io::FrameSource> frames_;
+  std::atomic<int> taken_{0};
+};
+
+// A frame taken from a real-time source goes stale while it waits: the run holds one loaded and
+// one extracted frame at most beyond the one it tracks, whatever the queues a recording gets.
+TEST(SlamReplayTest, ARealTimeSourceIsReadAtMostTwoFramesAhead) {
+  const slam::SlamSetup setup = slam::LoadSlamSetup("config/tum_fr1.yaml");
+  CountingCamera camera(std::make_unique<io::PreloadedSource>(
+      std::make_unique<io::FolderSource>(io::Sequence::Open(testing::DataDir() / "tum_fr1_rpy_200"),
+                                         setup.camera.depth_factor, kFrames)));
+  slam::RunOptions run_options;
+  ASSERT_GT(run_options.extraction_queue, 1);
+  int most_ahead = 0;
+  run_options.observe = [&](const slam::FrameView& view) {
+    most_ahead = std::max(most_ahead, camera.taken() - (view.index + 1));
+  };
+  const auto method = pipeline::CreateMethod("orb", pipeline::MethodConfig());
+  const slam::SequenceRun run = slam::RunFrames(camera, setup.camera.Camera(), method->feature2d(),
+                                                setup.options, run_options);
+  EXPECT_EQ(run.frames.size(), static_cast<std::size_t>(kFrames));
+  EXPECT_LE(most_ahead, 2);
 }
 
 TEST(SlamReplayTest, ABagPlaysInRealTimeToo) {

@@ -47,6 +47,9 @@ class FrameSource {
   virtual const Trajectory& ground_truth() const;
   // The frames skipped so far (real-time sources only), in order.
   virtual std::vector<DroppedFrame> dropped() const { return {}; }
+  // True where frames arrive on their own clock (a camera, a replay) and one not taken in time is
+  // dropped: a reader should then hold as few frames as it can, each as fresh as it can.
+  virtual bool real_time() const { return false; }
 };
 
 // The frames of a dataset folder (io::Sequence), its first `max_frames` (0: all), 16-bit depth

@@ -30,6 +30,7 @@ class OpenNiCamera : public FrameSource {
   ~OpenNiCamera() override;
 
   std::string Describe() const override;
+  bool real_time() const override { return true; }
   std::optional<std::size_t> size() const override { return std::nullopt; }
   std::optional<SourceFrame> Next() override;
   std::vector<DroppedFrame> dropped() const override;

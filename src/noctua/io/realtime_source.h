@@ -50,6 +50,7 @@ class RealTimeSource : public FrameSource {
   std::optional<SourceFrame> Next() override { return slot_.Take(); }
   const Trajectory& ground_truth() const override { return recording_->ground_truth(); }
   std::vector<DroppedFrame> dropped() const override { return slot_.dropped(); }
+  bool real_time() const override { return true; }
 
  private:
   void Play();

@@ -131,6 +131,12 @@ TEST(PreloadedSourceTest, ReadsEveryFrameFirstThenHandsThemOutInOrder) {
   }
 }
 
+TEST(RealTimeSourceTest, SaysItIsRealTimeWhereItsRecordingIsNot) {
+  const RealTimeSource replay(std::make_unique<GeneratedSource>(1), 1.0);
+  EXPECT_TRUE(replay.real_time());
+  EXPECT_FALSE(GeneratedSource(1).real_time());
+}
+
 TEST(RealTimeSourceTest, ARateThatIsNotPositiveIsRefused) {
   EXPECT_THROW(RealTimeSource(std::make_unique<GeneratedSource>(1), 0.0), Error);
 }

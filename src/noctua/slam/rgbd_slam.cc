@@ -162,6 +162,12 @@ class OrderedProducer {
   OrderedProducer(const OrderedProducer&) = delete;
   OrderedProducer& operator=(const OrderedProducer&) = delete;
 
+  // Whether an item is waiting to be taken.
+  bool HasReady() {
+    std::lock_guard lock(mutex_);
+    return !ready_.empty();
+  }
+
   // The next item in order, none after the last; rethrows what making it threw. While none is
   // ready, `while_waiting` (if any) is called, unlocked, until it returns false (no work left).
   std::optional<T> Pop(const std::function<bool()>& while_waiting = {}) {
@@ -313,6 +319,10 @@ SequenceRun RunFrames(RgbdSlam& slam, io::FrameSource& source, const RunOptions&
     ahead.pop_front();
     return extract(std::move(loaded));
   };
+  // Frames on their own clock: one loaded and one extracted ahead at most, so that a frame the
+  // SLAM cannot take in time is dropped at the source instead of waiting in a queue (its pose
+  // would come late), and mapping waits for a frame the tracking thread has in hand.
+  const bool real_time = source.real_time();
   SequenceRun run;
   bool started = false;
   const Stopwatch run_watch;
@@ -323,12 +333,13 @@ SequenceRun RunFrames(RgbdSlam& slam, io::FrameSource& source, const RunOptions&
   std::optional<OrderedProducer<LoadedFrame>> loader;
   std::optional<OrderedProducer<PreparedFrame>> extraction;
   if (run_options.overlap_extraction) {
-    loader.emplace(std::max(2, load_ahead), load);
-    extraction.emplace(run_options.extraction_queue, [&]() -> std::optional<PreparedFrame> {
-      std::optional<LoadedFrame> loaded = loader->Pop();
-      if (!loaded) return std::nullopt;
-      return extract(std::move(*loaded));
-    });
+    loader.emplace(real_time ? 1 : std::max(2, load_ahead), load);
+    extraction.emplace(real_time ? 1 : run_options.extraction_queue,
+                       [&]() -> std::optional<PreparedFrame> {
+                         std::optional<LoadedFrame> loaded = loader->Pop();
+                         if (!loaded) return std::nullopt;
+                         return extract(std::move(*loaded));
+                       });
   }
   // The slice of mapping run after the last frame was tracked, while this one was extracted: it
   // counts in this frame's time (its "mapping" and "total" stages).
@@ -372,7 +383,8 @@ SequenceRun RunFrames(RgbdSlam& slam, io::FrameSource& source, const RunOptions&
                            LastPose(slam.tracker()), &slam.tracker().map()});
     }
     if (run_options.progress) run_options.progress(i, count, run.frames.back());
-    mapping_slice_ms = slam.AdvanceMapping();
+    const bool frame_waiting = real_time && extraction && extraction->HasReady();
+    mapping_slice_ms = frame_waiting ? 0.0 : slam.AdvanceMapping();
   }
   run.final_ba_ms = slam.FinishRun();
   run.wall_s = run_watch.ElapsedMs() / 1000.0;
