@@ -191,14 +191,14 @@ slam::SlamSetup CheckedSetup(const SlamRunOptions& options) {
   return setup;
 }
 
-pipeline::MethodConfig RunMethodConfig(const SlamRunOptions& options) {
+pipeline::MethodConfig RunMethodConfig(const SlamRunOptions& options,
+                                       const io::FrameSource& source) {
   pipeline::MethodConfig config =
       pipeline::LoadMethodConfig(options.config, options.detector_model);
   config.detect_ahead = !options.detect_inline;
   config.detect_ahead_options.every_n = options.detect_every;
   // Frames that arrive in real time do not wait for the detector (it cannot look ahead of them).
-  config.detect_ahead_options.wait_for_detection =
-      options.source.replay_rate <= 0.0 && !options.source.live.has_value();
+  config.detect_ahead_options.wait_for_detection = !source.real_time();
   return config;
 }
 
@@ -215,9 +215,9 @@ io::FrameSourceOptions SourceOptions(const SlamRunOptions& options, const slam::
 SlamRunner::SlamRunner(const SlamRunOptions& options)
     : options_(options),
       setup_(CheckedSetup(options)),
-      config_(RunMethodConfig(options)),
-      method_(pipeline::CreateMethod(options.method, config_)),
-      source_(io::OpenFrameSource(SourceOptions(options, setup_))) {
+      source_(io::OpenFrameSource(SourceOptions(options, setup_))),
+      config_(RunMethodConfig(options, *source_)),
+      method_(pipeline::CreateMethod(options.method, config_)) {
   if (!options_.load_map.empty()) {
     loaded_map_ = slam::LoadMap(options_.load_map, RunMapIdentity());
     loaded_keyframes_ = loaded_map_->NumKeyFrames();

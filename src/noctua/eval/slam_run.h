@@ -104,9 +104,11 @@ class SlamRunner {
  private:
   SlamRunOptions options_;
   slam::SlamSetup setup_;
+  // Opened before the method: whether its frames come in real time decides how the method's
+  // detector runs.
+  std::unique_ptr<io::FrameSource> source_;
   pipeline::MethodConfig config_;
   std::unique_ptr<pipeline::FeatureMethod> method_;
-  std::unique_ptr<io::FrameSource> source_;
   std::unique_ptr<viz::Viewer> viewer_;  // with SlamRunOptions::viewer.any()
   std::optional<slam::Map> loaded_map_;  // read (and checked) before the run starts
   int loaded_keyframes_ = 0;
