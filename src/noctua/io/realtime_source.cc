@@ -46,7 +46,11 @@ std::vector<DroppedFrame> LatestFrameSlot::dropped() const {
 RealTimeSource::RealTimeSource(std::unique_ptr<FrameSource> recording, double rate)
     : recording_(std::move(recording)), rate_(rate) {
   CheckOption(rate_ > 0.0, "the replay rate must be positive");
-  player_ = std::thread([this] { Play(); });
+}
+
+std::optional<SourceFrame> RealTimeSource::Next() {
+  std::call_once(started_, [this] { player_ = std::thread([this] { Play(); }); });
+  return slot_.Take();
 }
 
 RealTimeSource::~RealTimeSource() {
@@ -55,7 +59,7 @@ RealTimeSource::~RealTimeSource() {
     stop_ = true;
   }
   stopped_.notify_all();
-  player_.join();
+  if (player_.joinable()) player_.join();  // never started when no frame was asked for
 }
 
 std::string RealTimeSource::Describe() const {

@@ -36,7 +36,9 @@ class LatestFrameSlot {
 // Plays a recording at `rate` times the speed its timestamps give (1: as recorded): frame k is
 // offered (t_k - t_0) / rate after frame 0, loaded ahead of its time on a thread of its own.
 // A reader still busy when frames arrive gets only the newest; the others are dropped(), so that
-// what a live camera does to a slow SLAM can be reproduced on a recording.
+// what a live camera does to a slow SLAM can be reproduced on a recording. The recording starts
+// playing at the first Next(): a reader's own start-up (loading a detector, say) costs it no
+// frame, as a camera switched on once the SLAM is ready would not.
 class RealTimeSource : public FrameSource {
  public:
   // Throws noctua::Error for a rate that is not positive.
@@ -47,7 +49,7 @@ class RealTimeSource : public FrameSource {
 
   std::string Describe() const override;
   std::optional<std::size_t> size() const override { return recording_->size(); }
-  std::optional<SourceFrame> Next() override { return slot_.Take(); }
+  std::optional<SourceFrame> Next() override;
   const Trajectory& ground_truth() const override { return recording_->ground_truth(); }
   std::vector<DroppedFrame> dropped() const override { return slot_.dropped(); }
   bool real_time() const override { return true; }
@@ -61,7 +63,8 @@ class RealTimeSource : public FrameSource {
   std::mutex mutex_;
   std::condition_variable stopped_;
   bool stop_ = false;
-  std::thread player_;  // last: starts after everything it uses exists
+  std::once_flag started_;
+  std::thread player_;  // started by the first Next()
 };
 
 }  // namespace noctua::io

@@ -61,8 +61,9 @@ TEST(LatestFrameSlotTest, HandsOnTheProducersErrorAfterItsFrames) {
   EXPECT_THROW(slot.Take(), Error);
 }
 
-// A reader that takes every frame at once misses none; one that never reads until the end gets
-// the last frame only. Either way, taken + dropped is every frame, in order.
+// A reader that takes every frame at once misses none; one that takes the first frame and then
+// nothing until the end gets the last frame only. Either way, taken + dropped is every frame, in
+// order.
 TEST(RealTimeSourceTest, EveryFrameIsEitherTakenOrDropped) {
   RealTimeSource fast_reader(std::make_unique<GeneratedSource>(10), 30.0);
   int taken = 0;
@@ -70,8 +71,9 @@ TEST(RealTimeSourceTest, EveryFrameIsEitherTakenOrDropped) {
   EXPECT_EQ(taken + static_cast<int>(fast_reader.dropped().size()), 10);
 
   RealTimeSource late_reader(std::make_unique<GeneratedSource>(10), 100.0);
-  // 10 frames at 100x 30 Hz arrive within 3 ms; the reader comes after all of them.
-  for (int wait = 0; wait < 1000 && late_reader.dropped().size() < 9; ++wait) {
+  ASSERT_EQ(late_reader.Next()->index, 0);
+  // The other 9 frames at 100x 30 Hz arrive within 3 ms; the reader comes after all of them.
+  for (int wait = 0; wait < 1000 && late_reader.dropped().size() < 8; ++wait) {
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
   const std::optional<SourceFrame> last = late_reader.Next();
@@ -79,8 +81,26 @@ TEST(RealTimeSourceTest, EveryFrameIsEitherTakenOrDropped) {
   EXPECT_EQ(last->index, 9);
   EXPECT_FALSE(late_reader.Next().has_value());
   const std::vector<DroppedFrame> dropped = late_reader.dropped();
-  ASSERT_EQ(dropped.size(), 9U);
-  for (int i = 0; i < 9; ++i) EXPECT_EQ(dropped[i].index, i);
+  ASSERT_EQ(dropped.size(), 8U);
+  for (int i = 0; i < 8; ++i) EXPECT_EQ(dropped[i].index, i + 1);
+}
+
+// The recording starts playing when the reader first asks for a frame, not when the source is
+// made: a reader that gets ready slowly (loads a detector) first misses no frame for it.
+TEST(RealTimeSourceTest, PlaysFromTheFirstFrameAskedFor) {
+  RealTimeSource replay(std::make_unique<GeneratedSource>(3), 100.0);
+  // Three frames at 100x 30 Hz take 0.7 ms to play: long over by now, had the clock started.
+  std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  EXPECT_TRUE(replay.dropped().empty());
+  const std::optional<SourceFrame> first = replay.Next();
+  ASSERT_TRUE(first.has_value());
+  EXPECT_EQ(first->index, 0);
+}
+
+// A source that is never read starts no player and ends cleanly.
+TEST(RealTimeSourceTest, ASourceNeverReadEndsCleanly) {
+  const RealTimeSource unread(std::make_unique<GeneratedSource>(3), 30.0);
+  EXPECT_TRUE(unread.dropped().empty());
 }
 
 // A frame gets its arrival time when it is offered, not before: what the SLAM's latency counts
