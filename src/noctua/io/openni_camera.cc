@@ -4,6 +4,7 @@
 
 #include <atomic>
 #include <cmath>
+#include <mutex>
 #include <opencv2/imgproc.hpp>
 #include <thread>
 
@@ -82,7 +83,8 @@ struct OpenNiCamera::Impl {
   openni::VideoStream depth;
   LatestFrameSlot slot;
   std::atomic<bool> stop{false};
-  std::thread reader;
+  std::once_flag started;
+  std::thread reader;  // started by the first Next()
 
   ~Impl() {
     [[maybe_unused]] const ThirdPartyAllocations ignored{};
@@ -169,13 +171,16 @@ std::unique_ptr<OpenNiCamera> OpenNiCamera::Open(const OpenNiOptions& options) {
           impl->name, "cannot register depth to colour");
   Require(impl->device.setDepthColorSyncEnabled(true), impl->name,
           "cannot synchronise depth and colour");
-  Impl* camera = impl.get();
-  impl->reader = std::thread([camera] { camera->Read(); });
   return std::unique_ptr<OpenNiCamera>(new OpenNiCamera(std::move(impl)));
 }
 
 std::string OpenNiCamera::Describe() const { return impl_->name; }
-std::optional<SourceFrame> OpenNiCamera::Next() { return impl_->slot.Take(); }
+std::optional<SourceFrame> OpenNiCamera::Next() {
+  Impl* camera = impl_.get();
+  std::call_once(camera->started,
+                 [camera] { camera->reader = std::thread([camera] { camera->Read(); }); });
+  return camera->slot.Take();
+}
 std::vector<DroppedFrame> OpenNiCamera::dropped() const { return impl_->slot.dropped(); }
 
 }  // namespace noctua::io

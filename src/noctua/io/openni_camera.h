@@ -20,8 +20,10 @@ struct OpenNiOptions {
   void Check() const;
 };
 
-// The frames a camera delivers, read on a thread of their own; a reader still busy with an
-// earlier frame gets only the newest (LatestFrameSlot), the others are dropped().
+// The frames a camera delivers, read on a thread of their own from the first Next() on (the
+// camera streams from Open(), but frames before the reader is ready are not its drops); a reader
+// still busy with an earlier frame gets only the newest (LatestFrameSlot), the others are
+// dropped().
 class OpenNiCamera : public FrameSource {
  public:
   // Throws noctua::Error when OpenNI2 finds no camera (at `uri`), or the camera has no colour
