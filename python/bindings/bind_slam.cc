@@ -25,7 +25,10 @@ class Slam {
             method,
             pipeline::LoadMethodConfig(PathArgument(config), PathArgument(detector).string()))),
         slam_(std::make_unique<slam::RgbdSlam>(setup_.camera.Camera(), method_->feature2d(),
-                                               setup_.options)) {}
+                                               setup_.options)) {
+    // Frames may come from a live camera: the first should not pay the extractor's set-up.
+    method_->Prepare(setup_.camera.Camera().size());
+  }
 
   py::object Track(const py::object& image, const py::object& depth, double timestamp) {
     const cv::Mat bgr = ImageArgument(image, "image");

@@ -290,6 +290,7 @@ SlamRunReport SlamRunner::Run(const SlamProgress& progress, const std::function<
     };
     run_options.stop = [this, stop] { return (stop && stop()) || viewer_->stop_requested(); };
   }
+  method_->Prepare(setup_.camera.Camera().size());
   slam::RgbdSlam slam(setup_.camera.Camera(), method_->feature2d(), setup_.options);
   if (!options_.load_map.empty()) {
     if (!loaded_map_) loaded_map_ = slam::LoadMap(options_.load_map, RunMapIdentity());

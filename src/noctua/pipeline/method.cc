@@ -79,6 +79,14 @@ DynamicStage MakeLoggedDynamicStage(const MethodConfig& config) {
   return stage;
 }
 
+// A frame for FeatureMethod::Prepare: colour noise, so that every stage (grey conversion,
+// corners, descriptors) runs as it does on a real frame.
+cv::Mat PreparationFrame(cv::Size size) {
+  cv::Mat frame(size, CV_8UC3);
+  cv::RNG(1).fill(frame, cv::RNG::UNIFORM, 0, 256);
+  return frame;
+}
+
 // Our extractor in one of its configurations; its dynamic filter takes the stage's masks.
 class ExtractorMethod : public FeatureMethod {
  public:
@@ -103,6 +111,10 @@ class ExtractorMethod : public FeatureMethod {
     extractor_->detectAndCompute(image, allowed, out.keypoints, out.descriptors);
     out.stats = extractor_->last_stats();
     return out;
+  }
+  void Prepare(cv::Size frame_size) override {
+    // A given dynamic mask stands in for the dynamic stage's.
+    extractor_->Extract(PreparationFrame(frame_size), cv::Mat::zeros(frame_size, CV_8U));
   }
   int norm_type() const override { return cv::NORM_HAMMING; }
   cv::Ptr<cv::Feature2D> feature2d() const override { return extractor_; }
@@ -162,9 +174,10 @@ class OpenCvMethod : public FeatureMethod {
   OpenCvMethod(const std::string& name, cv::Ptr<cv::Feature2D> feature2d, DynamicStage dynamic)
       : FeatureMethod(name, dynamic.used),
         wrapped_(dynamic.source != nullptr),
+        plain_(feature2d),
         feature2d_(dynamic.source ? cv::Ptr<cv::Feature2D>(cv::makePtr<DynamicRegionFeature2D>(
                                         std::move(feature2d), std::move(dynamic.source)))
-                                  : std::move(feature2d)),
+                                  : plain_),
         detection_ahead_(std::move(dynamic.ahead)) {}
 
   Extraction Run(const cv::Mat& image, const cv::Mat& exclusion_mask) override {
@@ -183,6 +196,12 @@ class OpenCvMethod : public FeatureMethod {
     out.stats.total_ms = out.stats.stage_ms["detect-and-describe"] = watch.ElapsedMs();
     return out;
   }
+  void Prepare(cv::Size frame_size) override {
+    std::vector<cv::KeyPoint> keypoints;
+    cv::Mat descriptors;
+    plain_->detectAndCompute(image::ToGray8U(PreparationFrame(frame_size)), cv::noArray(),
+                             keypoints, descriptors);
+  }
   int norm_type() const override { return feature2d_->defaultNorm(); }
   cv::Ptr<cv::Feature2D> feature2d() const override { return feature2d_; }
   std::shared_ptr<dynamic::AsyncMaskPipeline> detection_ahead() const override {
@@ -191,7 +210,8 @@ class OpenCvMethod : public FeatureMethod {
 
  private:
   bool wrapped_;
-  cv::Ptr<cv::Feature2D> feature2d_;
+  cv::Ptr<cv::Feature2D> plain_;      // without the dynamic stage
+  cv::Ptr<cv::Feature2D> feature2d_;  // plain_, or plain_ wrapped by the dynamic stage
   std::shared_ptr<dynamic::AsyncMaskPipeline> detection_ahead_;
 };
 

@@ -70,6 +70,11 @@ class FeatureMethod {
   virtual features::Extraction Run(const cv::Mat& image,
                                    const cv::Mat& exclusion_mask = cv::Mat()) = 0;
 
+  // Pays now what the first frame of this size would otherwise pay once (the edge map's filter
+  // bank and FFT plans, OpenCV's first-use set-up), on a generated frame, so that a camera's
+  // first frame takes as long as the next. Leaves results unchanged and the dynamic stage
+  // untouched (no detection is run or consumed).
+  virtual void Prepare(cv::Size frame_size) = 0;
   // cv::NORM_HAMMING for binary descriptors, cv::NORM_L2 for float ones.
   virtual int norm_type() const = 0;
 

@@ -53,6 +53,21 @@ TEST_P(MethodTest, RunsOnARealFrameAndHonoursTheExclusionMask) {
   EXPECT_THROW(method->Run(frame_, cv::Mat(10, 10, CV_8UC1, cv::Scalar(0))), Error);
 }
 
+// Prepare pays the first frame's one-time costs and nothing else: the frames after it get what
+// they get without it, including frames of another size.
+TEST_P(MethodTest, PreparingChangesNoResult) {
+  const auto fresh = CreateMethod(GetParam(), MethodConfig{})->Run(frame_);
+  auto prepared = CreateMethod(GetParam(), MethodConfig{});
+  prepared->Prepare(frame_.size());
+  const auto after = prepared->Run(frame_);
+  ASSERT_EQ(after.keypoints.size(), fresh.keypoints.size());
+  const int norm = prepared->norm_type() == cv::NORM_HAMMING ? cv::NORM_HAMMING : cv::NORM_L2;
+  EXPECT_EQ(cv::norm(after.descriptors, fresh.descriptors, norm), 0.0);
+  auto wrong_size = CreateMethod(GetParam(), MethodConfig{});
+  wrong_size->Prepare(cv::Size(320, 240));
+  EXPECT_EQ(cv::norm(wrong_size->Run(frame_).descriptors, fresh.descriptors, norm), 0.0);
+}
+
 INSTANTIATE_TEST_SUITE_P(AllMethods, MethodTest, ::testing::ValuesIn(MethodNames()),
                          [](const auto& param_info) {
                            std::string name = param_info.param;
@@ -299,6 +314,9 @@ TEST(CreateMethod, EveryMethodTakesTheDetectorsDynamicRegions) {
     ahead.detect_ahead_options.every_n = 1;
     auto method = CreateMethod(name, ahead);
     ASSERT_NE(method->detection_ahead(), nullptr);
+    // Preparing runs no detection and takes no mask: the submitted frame still gets its own.
+    method->Prepare(frame.size());
+    EXPECT_EQ(method->detection_ahead()->detections(), 0);
     method->detection_ahead()->Submit(frame);
     const auto detected_ahead = method->Run(frame);
     ASSERT_EQ(detected_ahead.keypoints.size(), with.keypoints.size());
