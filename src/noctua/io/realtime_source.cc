@@ -46,10 +46,15 @@ std::vector<DroppedFrame> LatestFrameSlot::dropped() const {
 RealTimeSource::RealTimeSource(std::unique_ptr<FrameSource> recording, double rate)
     : recording_(std::move(recording)), rate_(rate) {
   CheckOption(rate_ > 0.0, "the replay rate must be positive");
+  player_ = std::thread([this] { Play(); });
 }
 
 std::optional<SourceFrame> RealTimeSource::Next() {
-  std::call_once(started_, [this] { player_ = std::thread([this] { Play(); }); });
+  {
+    std::lock_guard lock(mutex_);
+    asked_ = true;
+  }
+  changed_.notify_all();
   return slot_.Take();
 }
 
@@ -58,8 +63,8 @@ RealTimeSource::~RealTimeSource() {
     std::lock_guard lock(mutex_);
     stop_ = true;
   }
-  stopped_.notify_all();
-  if (player_.joinable()) player_.join();  // never started when no frame was asked for
+  changed_.notify_all();
+  player_.join();
 }
 
 std::string RealTimeSource::Describe() const {
@@ -74,15 +79,17 @@ void RealTimeSource::Play() {
     std::optional<Clock::time_point> start;
     double first_timestamp = 0.0;
     while (std::optional<SourceFrame> frame = recording_->Next()) {
+      std::unique_lock lock(mutex_);
       if (!start) {
+        // Frame 0 is ready; the clock starts when the reader first asks for a frame.
+        changed_.wait(lock, [this] { return asked_ || stop_; });
         start = Clock::now();
         first_timestamp = frame->timestamp;
       }
       const auto due =
           *start + std::chrono::duration_cast<Clock::duration>(
                        std::chrono::duration<double>((frame->timestamp - first_timestamp) / rate_));
-      std::unique_lock lock(mutex_);
-      if (stopped_.wait_until(lock, due, [this] { return stop_; })) break;
+      if (changed_.wait_until(lock, due, [this] { return stop_; })) break;
       lock.unlock();
       slot_.Put(std::move(*frame));
     }

@@ -36,9 +36,9 @@ class LatestFrameSlot {
 // Plays a recording at `rate` times the speed its timestamps give (1: as recorded): frame k is
 // offered (t_k - t_0) / rate after frame 0, loaded ahead of its time on a thread of its own.
 // A reader still busy when frames arrive gets only the newest; the others are dropped(), so that
-// what a live camera does to a slow SLAM can be reproduced on a recording. The recording starts
-// playing at the first Next(): a reader's own start-up (loading a detector, say) costs it no
-// frame, as a camera switched on once the SLAM is ready would not.
+// what a live camera does to a slow SLAM can be reproduced on a recording. Frame 0 is loaded at
+// once but offered at the first Next(), where the clock starts: a reader's own start-up (loading
+// a detector, say) costs it no frame, as a camera switched on once the SLAM is ready would not.
 class RealTimeSource : public FrameSource {
  public:
   // Throws noctua::Error for a rate that is not positive.
@@ -61,10 +61,10 @@ class RealTimeSource : public FrameSource {
   double rate_;
   LatestFrameSlot slot_;
   std::mutex mutex_;
-  std::condition_variable stopped_;
+  std::condition_variable changed_;  // asked_ or stop_
+  bool asked_ = false;               // the reader has asked for a frame: the clock runs
   bool stop_ = false;
-  std::once_flag started_;
-  std::thread player_;  // started by the first Next()
+  std::thread player_;  // last: starts after everything it uses exists
 };
 
 }  // namespace noctua::io

@@ -97,7 +97,7 @@ TEST(RealTimeSourceTest, PlaysFromTheFirstFrameAskedFor) {
   EXPECT_EQ(first->index, 0);
 }
 
-// A source that is never read starts no player and ends cleanly.
+// A source that is never read ends cleanly: its player, holding frame 0 until asked, is stopped.
 TEST(RealTimeSourceTest, ASourceNeverReadEndsCleanly) {
   const RealTimeSource unread(std::make_unique<GeneratedSource>(3), 30.0);
   EXPECT_TRUE(unread.dropped().empty());
