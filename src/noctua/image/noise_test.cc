@@ -106,6 +106,24 @@ TEST(EstimateNoiseSigmaAtSpacing, MeasuresNoiseAtTheScaleOfTheComparisons) {
   EXPECT_LT(EstimateNoiseSigmaAtSpacing(clean, 3), 0.3);
 }
 
+TEST(EstimateNoiseSigmaAtSpacing, GivesTheMasksResponseOnAPatternWithAKnownOne) {
+  // Grey 100 ± 10, the sign flipping every `spacing` pixels along rows and columns: each second
+  // difference [1 -2 1] with taps that far apart gives -4 times the centre's deviation, the mask
+  // (their outer product) 16 times, so |response| is 160 at every pixel and the estimate is
+  // 160 / (6 * 0.6745).
+  for (const int spacing : {1, 3}) {
+    cv::Mat pattern(60, 80, CV_8U);
+    for (int r = 0; r < pattern.rows; ++r) {
+      for (int c = 0; c < pattern.cols; ++c) {
+        const bool flipped = ((r / spacing) + (c / spacing)) % 2 == 1;
+        pattern.at<std::uint8_t>(r, c) = flipped ? 90 : 110;
+      }
+    }
+    EXPECT_NEAR(EstimateNoiseSigmaAtSpacing(pattern, spacing), 160.0 / (6.0 * 0.6745), 1e-9)
+        << "spacing " << spacing;
+  }
+}
+
 TEST(EstimateNoiseSigma, RefusesWhatIsNotGrey8Bit) {
   EXPECT_THROW(EstimateNoiseSigmaAtSpacing(cv::Mat(9, 9, CV_8UC1), 0), Error);
   EXPECT_EQ(EstimateNoiseSigmaAtSpacing(cv::Mat(6, 6, CV_8UC1, cv::Scalar(9)), 3), 0.0);
