@@ -28,9 +28,10 @@ double EstimateNoiseSigmaAtSpacing(const cv::Mat& gray8u, int spacing) {
   if (spacing < 1) throw Error("noise estimate needs a tap spacing of at least 1 pixel");
   if (gray8u.rows < 2 * spacing + 1 || gray8u.cols < 2 * spacing + 1) return 0.0;
   // Immerkaer's mask is the outer product of the second difference [1 -2 1] with itself: the
-  // vertical second difference of each row, then its horizontal one, read straight from the
-  // pixels (a convolution would spend 49 taps where 9 are non-zero). |response| <= 16 * 255,
-  // so a histogram finds the median in the same pass.
+  // vertical second difference of each row, then its horizontal one, in integers straight from
+  // the pixels (a separable convolution with taps `spacing` apart would spend 2 x (2 spacing + 1)
+  // floating-point taps where 2 x 3 are non-zero). |response| <= 16 * 255, so a histogram finds
+  // the median in the same pass.
   std::array<int, 16 * 255 + 1> histogram{};
   std::vector<int> vertical(static_cast<std::size_t>(gray8u.cols));
   int count = 0;
