@@ -45,11 +45,11 @@ export -f run_one
 export out dataset config noctua
 xargs -P "$jobs" -L 1 bash -c 'run_one "$@"' _ <"$runs"
 
-# First frame whose decision differs: columns state (3), method (4) and keyframe (10) of frames.csv.
+# First frame whose decision differs: columns state (3), method (4) and keyframe (11) of frames.csv.
 first_decision() {
-  awk -F, 'NR == FNR { if (FNR > 1) ref[$1] = $3 "/" $4 "/kf" $10; next }
-           FNR > 1 && ($1 in ref) && ref[$1] != $3 "/" $4 "/kf" $10 {
-             print $1 ": " ref[$1] " -> " $3 "/" $4 "/kf" $10; found = 1; exit }
+  awk -F, 'NR == FNR { if (FNR > 1) ref[$1] = $3 "/" $4 "/kf" $11; next }
+           FNR > 1 && ($1 in ref) && ref[$1] != $3 "/" $4 "/kf" $11 {
+             print $1 ": " ref[$1] " -> " $3 "/" $4 "/kf" $11; found = 1; exit }
            END { if (!found) print "none" }' "$1" "$2"
 }
 # First frame (index in the reference run's trajectory) where the positions differ by more than

@@ -442,21 +442,24 @@ TEST_F(CliTest, SlamReportsMemoryAndMapSize) {
   }
   EXPECT_EQ(rows, 12);
   // The last row's map size is the report's (deterministic: no mapping stage was left to run after
-  // the last frame): columns 10 and 11 (keyframes, map_points); a tracked
-  // frame's moving keypoints in column 6 (none: rejection is off by default) and its confidence
-  // in columns 7 and 8 (position sigma in mm, rotation sigma in degrees).
+  // the last frame): columns 11 and 12 (keyframes, map_points); a tracked
+  // frame's moving keypoints in column 6 (none: rejection is off by default), its confidence
+  // in columns 7 and 8 (position sigma in mm, rotation sigma in degrees) and its fit in column 9
+  // (median reprojection error, pixels of the keypoints' levels).
   std::vector<std::string> cells;
   std::stringstream cells_in(last);
   for (std::string cell; std::getline(cells_in, cell, ',');) cells.push_back(cell);
-  ASSERT_GT(cells.size(), 12u);
+  ASSERT_GT(cells.size(), 13u);
   EXPECT_EQ(cells[2], "ok");
   EXPECT_EQ(cells[6], "0");
   EXPECT_GT(std::stod(cells[7]), 0.0);
   EXPECT_LT(std::stod(cells[7]), 20.0);
   EXPECT_GT(std::stod(cells[8]), 0.0);
-  EXPECT_EQ(std::stoi(cells[10]), report["keyframes"].get<int>());
-  EXPECT_EQ(std::stoi(cells[11]), report["map_points"].get<int>());
-  EXPECT_GT(std::stod(cells[12]), 10.0);
+  EXPECT_GT(std::stod(cells[9]), 0.1);
+  EXPECT_LT(std::stod(cells[9]), 3.0);
+  EXPECT_EQ(std::stoi(cells[11]), report["keyframes"].get<int>());
+  EXPECT_EQ(std::stoi(cells[12]), report["map_points"].get<int>());
+  EXPECT_GT(std::stod(cells[13]), 10.0);
 }
 
 // With a detector, the SLAM detects on a thread of its own every N-th frame by default, says so in

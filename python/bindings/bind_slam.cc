@@ -52,6 +52,7 @@ class Slam {
     dict["new_keyframe"] = last_.new_keyframe;
     dict["position_sigma_m"] = last_.position_sigma_m;
     dict["rotation_sigma_deg"] = last_.rotation_sigma_deg;
+    dict["residual_px"] = last_.residual_px;
     dict["stage_ms"] = last_.stage_ms;
     return dict;
   }

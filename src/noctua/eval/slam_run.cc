@@ -345,11 +345,15 @@ std::string FrameRow(std::size_t i, const slam::FrameOutcome& f,
     std::snprintf(sigma, sizeof(sigma), "%.2f,%.3f", 1000.0 * f.position_sigma_m,
                   f.rotation_sigma_deg);
   }
-  char buffer[192];
-  std::snprintf(buffer, sizeof(buffer), "%zu,%.6f,%s,%s,%d,%d,%d,%s,%d,%d,%d,%.1f", i, f.timestamp,
-                TrackingStateName(f.state), f.method.c_str(), f.keypoints, f.inliers,
-                f.moving_keypoints, sigma, f.new_keyframe ? 1 : 0, f.keyframes, f.map_points,
-                rss_mb);
+  // Nor has a frame whose pose was not measured (coasted) a residual.
+  char residual[32] = "";
+  if (std::isfinite(f.residual_px))
+    std::snprintf(residual, sizeof(residual), "%.3f", f.residual_px);
+  char buffer[224];
+  std::snprintf(buffer, sizeof(buffer), "%zu,%.6f,%s,%s,%d,%d,%d,%s,%s,%d,%d,%d,%.1f", i,
+                f.timestamp, TrackingStateName(f.state), f.method.c_str(), f.keypoints, f.inliers,
+                f.moving_keypoints, sigma, residual, f.new_keyframe ? 1 : 0, f.keyframes,
+                f.map_points, rss_mb);
   std::string row = buffer;
   // A stage the frame did not have (no latency without a real-time source) stays empty.
   for (const auto& stage : stages) {
@@ -376,10 +380,10 @@ std::string FramesCsv(const slam::SequenceRun& run, const std::vector<std::strin
                       const std::vector<double>& rss_mb) {
   std::string csv =
       "frame,timestamp,state,method,keypoints,inliers,moving_keypoints,position_sigma_mm,"
-      "rotation_sigma_deg,keyframe,keyframes,map_points,rss_mb";
+      "rotation_sigma_deg,residual_px,keyframe,keyframes,map_points,rss_mb";
   for (const auto& stage : stages) csv.append(",").append(stage).append("_ms");
   csv += "\n";
-  const std::size_t columns = 13 + stages.size();
+  const std::size_t columns = 14 + stages.size();
   std::size_t next_dropped = 0;
   const auto dropped_before = [&](int index) {
     for (;

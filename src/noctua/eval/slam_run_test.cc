@@ -19,6 +19,8 @@ slam::FrameOutcome Outcome(slam::TrackingState state, double track_ms, double ma
   f.position_sigma_m =
       state == slam::TrackingState::kOk ? 0.0042 : std::numeric_limits<double>::infinity();
   f.rotation_sigma_deg = 0.125;
+  f.residual_px =
+      state == slam::TrackingState::kOk ? 0.875 : std::numeric_limits<double>::infinity();
   f.new_keyframe = mapping_ms > 0.0;
   f.keyframes = 3;
   f.map_points = 700;
@@ -35,11 +37,12 @@ TEST(FramesCsvTest, OneRowPerFrameWithEmptySigmaWithoutPose) {
                 Outcome(slam::TrackingState::kLost, 3.0, 0.0)};
   run.frames[1].index = 1;
   const std::string csv = FramesCsv(run, {"track", "mapping"}, {120.0});
-  EXPECT_EQ(csv,
-            "frame,timestamp,state,method,keypoints,inliers,moving_keypoints,position_sigma_mm,"
-            "rotation_sigma_deg,keyframe,keyframes,map_points,rss_mb,track_ms,mapping_ms\n"
-            "0,1.500000,ok,motion,1000,250,0,4.20,0.125,1,3,700,120.0,2.000,10.000\n"
-            "1,1.500000,lost,,1000,250,0,,,0,3,700,0.0,3.000,\n");
+  EXPECT_EQ(
+      csv,
+      "frame,timestamp,state,method,keypoints,inliers,moving_keypoints,position_sigma_mm,"
+      "rotation_sigma_deg,residual_px,keyframe,keyframes,map_points,rss_mb,track_ms,mapping_ms\n"
+      "0,1.500000,ok,motion,1000,250,0,4.20,0.125,0.875,1,3,700,120.0,2.000,10.000\n"
+      "1,1.500000,lost,,1000,250,0,,,,0,3,700,0.0,3.000,\n");
 }
 
 // A real-time run: the frames the source dropped get rows of their own, in frame order, so that
@@ -53,12 +56,12 @@ TEST(FramesCsvTest, DroppedFramesHaveARowInFrameOrder) {
   const std::string csv = FramesCsv(run, {"track"}, {});
   EXPECT_EQ(csv,
             "frame,timestamp,state,method,keypoints,inliers,moving_keypoints,position_sigma_mm,"
-            "rotation_sigma_deg,keyframe,keyframes,map_points,rss_mb,track_ms\n"
-            "0,1.500000,ok,motion,1000,250,0,4.20,0.125,0,3,700,0.0,2.000\n"
-            "1,1.250000,dropped,,,,,,,,,,,\n"
-            "2,1.500000,dropped,,,,,,,,,,,\n"
-            "3,1.500000,ok,motion,1000,250,0,4.20,0.125,0,3,700,0.0,2.000\n"
-            "4,2.000000,dropped,,,,,,,,,,,\n");
+            "rotation_sigma_deg,residual_px,keyframe,keyframes,map_points,rss_mb,track_ms\n"
+            "0,1.500000,ok,motion,1000,250,0,4.20,0.125,0.875,0,3,700,0.0,2.000\n"
+            "1,1.250000,dropped,,,,,,,,,,,,\n"
+            "2,1.500000,dropped,,,,,,,,,,,,\n"
+            "3,1.500000,ok,motion,1000,250,0,4.20,0.125,0.875,0,3,700,0.0,2.000\n"
+            "4,2.000000,dropped,,,,,,,,,,,,\n");
 }
 
 TEST(SummarizeStagesTest, MedianMeanAndMaxOverTheFramesThatHaveTheStage) {

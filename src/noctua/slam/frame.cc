@@ -39,8 +39,10 @@ FrameFeatures::FrameFeatures(std::vector<cv::KeyPoint> keypoints, cv::Mat descri
 
 FrameFeatures::FrameFeatures(std::vector<cv::KeyPoint> keypoints, cv::Mat descriptors,
                              std::vector<double> depth, std::vector<double> right_u,
-                             const geometry::PinholeCamera& camera)
+                             const geometry::PinholeCamera& camera,
+                             std::vector<Eigen::Vector2d> undistorted)
     : keypoints_(std::move(keypoints)),
+      undistorted_(std::move(undistorted)),
       depth_(std::move(depth)),
       right_u_(std::move(right_u)),
       descriptors_(std::move(descriptors)),
@@ -49,8 +51,33 @@ FrameFeatures::FrameFeatures(std::vector<cv::KeyPoint> keypoints, cv::Mat descri
   if (depth_.size() != keypoints_.size() || right_u_.size() != keypoints_.size()) {
     throw Error("SLAM features need one depth and one right coordinate per keypoint");
   }
-  Undistort();
+  if (undistorted_.empty()) {
+    Undistort();
+  } else if (undistorted_.size() != keypoints_.size()) {
+    throw Error("SLAM features need one undistorted position per keypoint");
+  }
   BuildGrid();
+}
+
+FrameFeatures FrameFeatures::AtMiddleRow(const Eigen::Vector3d& rotation_per_s,
+                                         const Eigen::Vector3d& translation_per_s,
+                                         double readout_s) const {
+  FrameFeatures moved = *this;
+  const double height = camera_.height();
+  for (std::size_t i = 0; i < keypoints_.size(); ++i) {
+    const double dt = (keypoints_[i].pt.y / height - 0.5) * readout_s;
+    const double depth = depth_[i];
+    // A point without depth keeps its ray's direction: unit depth, and the turn alone.
+    const Eigen::Vector3d seen = camera_.Unproject(undistorted_[i], depth > 0.0 ? depth : 1.0);
+    Eigen::Vector3d at_middle = seen - dt * rotation_per_s.cross(seen);
+    if (depth > 0.0) at_middle -= dt * translation_per_s;
+    if (at_middle.z() <= 0.0) continue;
+    const Eigen::Vector2d pixel = camera_.Project(at_middle);
+    if (depth > 0.0) moved.right_u_[i] += pixel.x() - undistorted_[i].x();
+    moved.undistorted_[i] = pixel;
+  }
+  moved.BuildGrid();
+  return moved;
 }
 
 void FrameFeatures::CheckDescriptors() const {

@@ -32,8 +32,11 @@ class FrameFeatures {
                 const geometry::PinholeCamera& camera, double bf, double min_depth_m);
   // Features restored from a saved map (map_io.h): depth and right coordinate per keypoint as
   // the constructor above found them; undistorted positions and the grid are derived again.
+  // `undistorted` are the positions as the map had them (AtMiddleRow moves them); empty: derived
+  // from the keypoints again.
   FrameFeatures(std::vector<cv::KeyPoint> keypoints, cv::Mat descriptors, std::vector<double> depth,
-                std::vector<double> right_u, const geometry::PinholeCamera& camera);
+                std::vector<double> right_u, const geometry::PinholeCamera& camera,
+                std::vector<Eigen::Vector2d> undistorted = {});
 
   int size() const { return static_cast<int>(keypoints_.size()); }
   const cv::KeyPoint& keypoint(int i) const { return keypoints_[static_cast<std::size_t>(i)]; }
@@ -47,6 +50,17 @@ class FrameFeatures {
   const cv::Mat& descriptors() const { return descriptors_; }
   const geometry::PinholeCamera& camera() const { return camera_; }
   int CountWithDepth() const;
+
+  // These features as the middle row would have seen them, for a rolling-shutter camera that
+  // read its rows over `readout_s` (first to last) while moving at `velocity`: the motion per
+  // second as a rotation vector (rad/s) and a translation (m/s) of points in camera coordinates,
+  // T(t + dt) ~ (I + dt [rotation]x, dt translation) T(t). A keypoint on row y was seen
+  // (y / height - 1/2) * readout_s after the middle row; its point is moved back by that much of
+  // the motion (lifted with its depth, or along its ray without one: there the turn alone) and
+  // projected again. Undistorted positions and right coordinates change, the keypoints as
+  // detected do not.
+  FrameFeatures AtMiddleRow(const Eigen::Vector3d& rotation_per_s,
+                            const Eigen::Vector3d& translation_per_s, double readout_s) const;
 
   // The bounds of undistorted pixel positions (the image's undistorted corners).
   double min_x() const { return min_x_; }

@@ -19,7 +19,7 @@ namespace {
 constexpr std::uint32_t kNoPoint = 0xFFFFFFFFu;
 // Bytes of the smallest record of each kind, so that a count read from a damaged file is refused
 // before anything of that size is allocated.
-constexpr std::size_t kKeypointBytes = 5 * 4 + 2 * 4 + 2 * 8 + 32 + 4;
+constexpr std::size_t kKeypointBytes = 5 * 4 + 2 * 4 + 4 * 8 + 32 + 4;
 constexpr std::size_t kKeyFrameBytes = 8 + 8 + 12 * 8 + 4;
 constexpr std::size_t kPointBytes = 3 * 8 + 32 + 3 * 8 + 2 * 8 + 4 + 4;
 constexpr std::size_t kPairBytes = 8;
@@ -329,6 +329,9 @@ void MapFile::WriteKeyFrame(Writer& w, const KeyFrame& keyframe, const Indices& 
     w.I32(k.class_id);
     w.F64(features.depth(i));
     w.F64(features.right_u(i));
+    // As tracking left it: moved to the middle row's time for a rolling shutter.
+    w.F64(features.undistorted(i).x());
+    w.F64(features.undistorted(i).y());
     w.Raw(features.descriptor(i), 32);
     const auto found = indices.point_index.find(keyframe.map_point(i));
     w.U32(found == indices.point_index.end() ? kNoPoint : found->second);
@@ -406,6 +409,7 @@ void MapFile::ReadKeyFrame(Reader& r, const MapIdentity& identity, Map& map,
   std::vector<cv::KeyPoint> keypoints(count);
   cv::Mat descriptors(static_cast<int>(count), 32, CV_8U);
   std::vector<double> depth(count), right_u(count);
+  std::vector<Eigen::Vector2d> undistorted(count);
   std::vector<std::uint32_t> points(count);
   const double width = identity.intrinsics.width;
   const double height = identity.intrinsics.height;
@@ -416,6 +420,8 @@ void MapFile::ReadKeyFrame(Reader& r, const MapIdentity& identity, Map& map,
     k.class_id = r.I32();
     depth[i] = r.F64();
     right_u[i] = r.F64();
+    undistorted[i].x() = r.F64();
+    undistorted[i].y() = r.F64();
     std::memcpy(descriptors.ptr<uchar>(static_cast<int>(i)), r.Raw(32).data(), 32);
     points[i] = r.U32();
     // Keypoints lie in the image (undistorting anything far outside it need not converge); a
@@ -424,14 +430,16 @@ void MapFile::ReadKeyFrame(Reader& r, const MapIdentity& identity, Map& map,
         k.pt.x >= -1.0 && k.pt.x <= width + 1.0 && k.pt.y >= -1.0 && k.pt.y <= height + 1.0;
     if (!in_image || !std::isfinite(k.size) || !std::isfinite(k.angle) ||
         !std::isfinite(k.response) || k.octave < 0 || k.octave >= identity.num_levels ||
-        !(depth[i] >= 0.0 && depth[i] < kFarthest) || !(std::abs(right_u[i]) < kFarthest)) {
+        !(depth[i] >= 0.0 && depth[i] < kFarthest) || !(std::abs(right_u[i]) < kFarthest) ||
+        !(undistorted[i].cwiseAbs().maxCoeff() < kFarthest)) {
       r.Fail("keypoint " + std::to_string(i) + " is not valid");
     }
   }
   const geometry::PinholeCamera camera(identity.intrinsics, identity.distortion);
-  Frame frame(frame_id, timestamp,
-              std::make_shared<const FrameFeatures>(std::move(keypoints), descriptors,
-                                                    std::move(depth), std::move(right_u), camera));
+  Frame frame(
+      frame_id, timestamp,
+      std::make_shared<const FrameFeatures>(std::move(keypoints), descriptors, std::move(depth),
+                                            std::move(right_u), camera, std::move(undistorted)));
   frame.pose_cw = pose;
   map.AddKeyFrame(frame);
   slots.push_back(std::move(points));

@@ -36,7 +36,7 @@ MapIdentity MakeMapIdentity(const std::string& method, const geometry::PinholeCa
 // sections, every number little-endian and fixed-width. A new version is written whenever the
 // layout changes; readers refuse any other version.
 inline constexpr char kMapMagic[8] = {'N', 'O', 'C', 'T', 'M', 'A', 'P', '\0'};
-inline constexpr std::uint32_t kMapFormatVersion = 1;
+inline constexpr std::uint32_t kMapFormatVersion = 2;
 inline constexpr std::size_t kMapHeaderBytes = 24;
 inline constexpr std::size_t kMapChecksumOffset = 20;
 

@@ -3,6 +3,7 @@
 #include <ceres/ceres.h>
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <limits>
@@ -127,6 +128,25 @@ PoseUncertainty EstimatePoseUncertainty(const Frame& frame, const ScalePyramid& 
   uncertainty.position_sigma_m = std::sqrt(position.eigenvalues().maxCoeff());
   uncertainty.rotation_sigma_deg = std::sqrt(rotation.eigenvalues().maxCoeff()) * 180.0 / M_PI;
   return uncertainty;
+}
+
+double MedianReprojectionError(const Frame& frame, const ScalePyramid& pyramid, double bf) {
+  const FrameFeatures& features = *frame.features;
+  const Intrinsics k = IntrinsicsOf(features, bf);
+  std::vector<double> errors;
+  for (int i = 0; i < frame.size(); ++i) {
+    const MapPoint* point = frame.map_points[static_cast<std::size_t>(i)];
+    if (point == nullptr || point->bad() || frame.outlier[static_cast<std::size_t>(i)]) continue;
+    const Eigen::Vector3d p = frame.pose_cw * point->position();
+    if (p.z() <= 0.0) continue;
+    double r[3] = {0.0, 0.0, 0.0};
+    Residuals(k, ObservationOf(features, i, pyramid), p, r, /*stereo=*/false);
+    errors.push_back(std::hypot(r[0], r[1]));
+  }
+  if (errors.empty()) return std::numeric_limits<double>::infinity();
+  const auto middle = errors.begin() + static_cast<std::ptrdiff_t>(errors.size() / 2);
+  std::nth_element(errors.begin(), middle, errors.end());
+  return *middle;
 }
 
 int OptimizePose(Frame& frame, const ScalePyramid& pyramid, double bf, const CentrePrior* prior,

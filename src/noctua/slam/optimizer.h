@@ -37,6 +37,12 @@ int OptimizePose(Frame& frame, const ScalePyramid& pyramid, double bf,
                  const CentrePrior* prior = nullptr,
                  const std::vector<bool>* on_probation = nullptr);
 
+// How well the frame's pose fits its matches: the median distance between each matched keypoint
+// and its map point's projection, in pixels of the keypoint's pyramid level (infinite without a
+// match). Noise alone leaves about 1 (ORB-SLAM's model); a systematic error that the pose cannot
+// absorb, such as a rolling shutter's shear, adds to it.
+double MedianReprojectionError(const Frame& frame, const ScalePyramid& pyramid, double bf);
+
 // How well a tracked pose is determined by its inlier matches: the marginal standard deviations
 // of the camera's position and orientation, from the Gauss-Newton information J^T J of the
 // inliers' residuals (each weighted by its keypoint's level, so a level-0 pixel error counts as

@@ -249,6 +249,7 @@ FrameOutcome Outcome(const TrackResult& result, const PreparedFrame& prepared, d
   outcome.moving_keypoints = result.moving_keypoints;
   outcome.position_sigma_m = result.position_sigma_m;
   outcome.rotation_sigma_deg = result.rotation_sigma_deg;
+  outcome.residual_px = result.residual_px;
   outcome.new_keyframe = result.new_keyframe;
   outcome.stage_ms = result.stage_ms;
   outcome.stage_ms["load"] = prepared.load_ms;
@@ -361,7 +362,6 @@ SequenceRun RunFrames(RgbdSlam& slam, io::FrameSource& source, const RunOptions&
     std::optional<PreparedFrame> prepared =
         extraction ? extraction->Pop(map_while_waiting) : prepare_in_line();
     if (!prepared) break;
-    const std::shared_ptr<const FrameFeatures> features = prepared->extracted.features;
     TrackResult result = slam.Track(std::move(prepared->extracted), /*advance_mapping=*/false);
     result.stage_ms["mapping"] += mapping_slice_ms + waiting_mapping_ms;
     if (prepared->arrival) {
@@ -379,7 +379,7 @@ SequenceRun RunFrames(RgbdSlam& slam, io::FrameSource& source, const RunOptions&
       run.lost_frames.push_back(index);
     }
     if (run_options.observe) {
-      run_options.observe({index, prepared->bgr, features.get(), &result, &run.frames.back(),
+      run_options.observe({index, prepared->bgr, result.features.get(), &result, &run.frames.back(),
                            LastPose(slam.tracker()), &slam.tracker().map()});
     }
     if (run_options.progress) run_options.progress(i, count, run.frames.back());

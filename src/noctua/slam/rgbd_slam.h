@@ -98,6 +98,7 @@ struct FrameOutcome {
   int moving_keypoints = 0;       // kept out of tracking and mapping as moving
   double position_sigma_m = 0.0;  // the pose's confidence (TrackResult); infinite without pose
   double rotation_sigma_deg = 0.0;
+  double residual_px = 0.0;  // TrackResult::residual_px; infinite without a measured pose
   bool new_keyframe = false;
   int keyframes = 0;   // map size after this frame
   int map_points = 0;  // (so memory can be set against it over a long run)

@@ -107,6 +107,61 @@ TEST_F(RgbdSlamTest, TracksEveryFrameOfTheFirst100OfFr1) {
 // With the local bundle adjustment on its own thread (what `noctua slam` does), the same 100
 // frames: every frame tracked and the same error bound (measured 0.018-0.021 m over three runs
 // of the 200 frames against 0.0196 m in line); the last solve has landed when the run returns.
+// fr1's Kinect reads its rows over about 22 ms (config/tum_fr1.yaml, measured without ground
+// truth by scripts/rolling_shutter_sweep.sh); in fr1/rpy's fast turns the image is sheared by
+// several pixels from top to bottom. Moving each keypoint to the middle row's time leaves the
+// poses less reprojection error and less error against the ground truth (measured on these 100
+// frames: 0.0101 -> 0.0072 m, median residual 1.083 -> 1.056 px per frame on average).
+TEST_F(RgbdSlamTest, CorrectingTheRollingShutterLowersResidualAndError) {
+  ASSERT_GT(setup_->options.rolling_shutter_s, 0.015);
+  ASSERT_LT(setup_->options.rolling_shutter_s, 0.03);
+  SlamOptions global_shutter = setup_->options;
+  global_shutter.rolling_shutter_s = 0.0;
+  const SequenceRun corrected = Run(100);
+  const SequenceRun uncorrected = Run(100, {}, global_shutter);
+  const auto mean_residual = [](const SequenceRun& run) {
+    double sum = 0.0;
+    int count = 0;
+    for (const FrameOutcome& frame : run.frames) {
+      if (!std::isfinite(frame.residual_px)) continue;
+      sum += frame.residual_px;
+      ++count;
+    }
+    return count > 0 ? sum / count : std::numeric_limits<double>::infinity();
+  };
+  EXPECT_EQ(corrected.trajectory.size(), 100u);
+  EXPECT_LT(mean_residual(corrected), mean_residual(uncorrected));
+  EXPECT_LT(Ate(corrected.trajectory), 0.85 * Ate(uncorrected.trajectory));
+}
+
+// Camera.rolling_shutter_s is read from the settings file and must be a time in [0, 1) s.
+TEST(SlamSetupTest, ReadsTheRollingShutterReadoutAndRefusesANegativeOne) {
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("noctua_rs_" + std::to_string(getpid()));
+  std::filesystem::create_directories(dir);
+  const auto write = [&dir](const std::string& value) {
+    std::ifstream in(kConfigDir / "tum_fr1.yaml");
+    std::ofstream out(dir / "s.yaml");
+    for (std::string line; std::getline(in, line);) {
+      if (line.rfind("Camera.rolling_shutter_s:", 0) != 0) out << line << "\n";
+    }
+    if (!value.empty()) out << "Camera.rolling_shutter_s: " << value << "\n";
+  };
+  write("0.03");
+  EXPECT_DOUBLE_EQ(LoadSlamSetup(dir / "s.yaml").options.rolling_shutter_s, 0.03);
+  write("");
+  EXPECT_DOUBLE_EQ(LoadSlamSetup(dir / "s.yaml").options.rolling_shutter_s, 0.0);
+  write("-0.01");
+  try {
+    LoadSlamSetup(dir / "s.yaml");
+    ADD_FAILURE() << "a negative readout was accepted";
+  } catch (const Error& error) {
+    EXPECT_THAT(error.what(), ::testing::HasSubstr("Camera.rolling_shutter_s"));
+    EXPECT_THAT(error.what(), ::testing::HasSubstr("s.yaml"));
+  }
+  std::filesystem::remove_all(dir);
+}
+
 TEST_F(RgbdSlamTest, TracksEveryFrameWithTheBundleAdjustmentInTheBackground) {
   SlamOptions options = setup_->options;
   options.background_bundle_adjustment = true;
@@ -207,8 +262,9 @@ SequenceRun RunRefined(const io::Sequence& sequence, const SlamSetup& setup,
 // Frames between keyframes re-optimised against the map once 4 keyframes followed them
 // (SlamOptions::refine_frames_after_keyframes): no more frames wait than the bound (4 keyframes'
 // worth: 4 x max_frames_between_keyframes), none once the run has returned, keyframes' frames
-// keep their poses, and the trajectory is closer to the ground truth (measured 0.0111 against
-// 0.0127 m without).
+// keep their poses, and the trajectory is closer to the ground truth (measured 0.0093 against
+// 0.0096 m without; 0.0111 against 0.0127 m before the rolling shutter was corrected, which
+// removed most of what the refinement made up for).
 TEST_F(RgbdSlamTest, RefinesTheFramesBetweenKeyFramesAgainstTheMap) {
   int most_waiting = 0;
   int never_waiting = 0;
@@ -234,7 +290,7 @@ TEST_F(RgbdSlamTest, RefinesTheFramesBetweenKeyFramesAgainstTheMap) {
   EXPECT_GT(frames_moved, 50);
   std::cerr << "ATE refined / as tracked: " << Ate(refined.trajectory) << " / "
             << Ate(tracked.trajectory) << " m\n";
-  EXPECT_LT(Ate(refined.trajectory), 0.9 * Ate(tracked.trajectory));
+  EXPECT_LT(Ate(refined.trajectory), Ate(tracked.trajectory));
 }
 
 // fr1's fast turn (frames 44-51) tracked with `paper`: 44-58 inliers, the pose held by the motion
@@ -393,8 +449,9 @@ TEST_F(RgbdSlamTest, WithoutTriangulationPointsComeFromDepthOnly) {
 
 // Depth blanked over the left half of every frame (as a hole of the sensor would): with
 // triangulation the map gets points there, from keypoints that have no depth, and every frame
-// is still tracked; without it, half the frames are not. The motion prior is off: it alone
-// carries this sequence through (measured: every frame tracked without triangulation).
+// is still tracked; without it, half the frames are not. The motion prior is off, and so is the
+// rolling-shutter correction: each alone carries this sequence through (measured: every frame
+// tracked without triangulation), and a test of triangulation needs frames that need it.
 TEST_F(RgbdSlamTest, TriangulatesWhereDepthIsMissingAndTracksEveryFrame) {
   constexpr int kFrames = 100;
   constexpr double kBlankLeftOfPx = 320.0;
@@ -402,6 +459,7 @@ TEST_F(RgbdSlamTest, TriangulatesWhereDepthIsMissingAndTracksEveryFrame) {
     SlamOptions options = setup_->options;
     options.triangulation.enabled = triangulate;
     options.motion_prior_acceleration_mps2 = 0.0;
+    options.rolling_shutter_s = 0.0;
     RgbdSlam slam(setup_->camera.Camera(), Orb(*setup_), options);
     std::vector<int> not_tracked;
     for (int i = 0; i < kFrames; ++i) {

@@ -40,6 +40,8 @@ void SlamOptions::Check() const {
   CheckOption(bf > 0.0, "slam: bf (baseline times fx) must be positive");
   CheckOption(close_depth_m > 0.0, "slam: close_depth_m must be positive");
   CheckOption(min_depth_m >= 0.0, "slam: min_depth_m must not be negative");
+  CheckOption(rolling_shutter_s >= 0.0 && rolling_shutter_s < 1.0,
+              "Camera.rolling_shutter_s must be in [0, 1) seconds");
   CheckOption(max_depth_m == 0.0 || max_depth_m > min_depth_m,
               "slam: max_depth_m must be 0 (no limit) or greater than min_depth_m");
   CheckOption(min_initial_points >= 10, "slam: min_initial_points must be at least 10");
@@ -153,6 +155,7 @@ SlamSetup LoadSlamSetup(const std::filesystem::path& path) {
   options.num_levels = setup.camera.orb.num_levels;
   options.bf = io::OptionalNumber(root, "Camera.bf", fx * 0.0773, path);
   options.close_depth_m = io::OptionalNumber(root, "ThDepth", 40.0, path) * options.bf / fx;
+  options.rolling_shutter_s = io::OptionalNumber(root, "Camera.rolling_shutter_s", 0.0, path);
   if (const YAML::Node vocabulary = root["Vocabulary.file"]; vocabulary) {
     if (!vocabulary.IsScalar()) ThrowFileError(path, "Vocabulary.file must be a file name");
     options.vocabulary = vocabulary.as<std::string>();

@@ -96,6 +96,13 @@ struct SlamOptions {
   // close points are trusted enough to create map points from a single keyframe.
   double close_depth_m = 3.1;
   double min_depth_m = 0.1;  // depth readings below this are ignored
+  // Time a rolling-shutter colour camera takes to read its rows, first to last (settings file:
+  // Camera.rolling_shutter_s; 0: a global shutter). Each row is seen at its own time, so in a
+  // fast turn the image is sheared: on tum_fr1_rpy_200 rows 480 apart are 1-2 degrees of turn
+  // apart. Tracking moves every keypoint to where the middle row would have seen it, along the
+  // constant-velocity motion (FrameFeatures::AtMiddleRow). Measured, not looked up: the value
+  // that tracks most inliers (scripts/rolling_shutter_sweep.sh, no ground truth needed).
+  double rolling_shutter_s = 0.0;
   // Depth readings beyond this are ignored (0: no limit). For experiments that take depth away
   // from far surfaces, as a sensor of shorter range would (docs/slam.md "Triangulated points").
   double max_depth_m = 0.0;
@@ -253,7 +260,8 @@ std::shared_ptr<const place::Vocabulary> LoadSlamVocabulary(const SlamOptions& o
 
 // Camera and SLAM settings from one ORB-SLAM-style settings file (config/*.yaml): the camera
 // preset (see io::ReadCameraConfig), the pyramid from ORBextractor.scaleFactor / nLevels, and
-// ORB-SLAM's optional Camera.bf (default fx * 0.0773 m, the value of ORB-SLAM's TUM files) and
+// ORB-SLAM's optional Camera.bf (default fx * 0.0773 m, the value of ORB-SLAM's TUM files),
+// noctua's optional Camera.rolling_shutter_s (SlamOptions::rolling_shutter_s, default 0) and
 // ThDepth (default 40; close depth = ThDepth * bf / fx), noctua's optional Vocabulary.file
 // (SlamOptions::vocabulary; a relative path is relative to the settings file) and noctua's
 // optional `slam:` section: `triangulate` (TriangulationOptions::enabled),

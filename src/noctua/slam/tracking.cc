@@ -77,6 +77,8 @@ Tracker::Tracker(const SlamOptions& options)
 TrackResult Tracker::Track(Frame frame) {
   TrackResult result;
   current_ = std::make_unique<Frame>(std::move(frame));
+  CorrectRollingShutter(*current_);
+  result.features = current_->features;
   tracked_prior_.reset();
   mapper_.CollectBundleAdjustment(/*wait=*/false);
   Stopwatch watch;
@@ -119,6 +121,7 @@ TrackResult Tracker::Track(Frame frame) {
     if (ok) {
       result.position_sigma_m = uncertainty_.position_sigma_m;
       result.rotation_sigma_deg = uncertainty_.rotation_sigma_deg;
+      result.residual_px = MedianReprojectionError(*current_, pyramid_, options_.bf);
       recent_uncertainty_.push_back(uncertainty_);
       constexpr std::size_t kRecentFrames = 30;
       if (recent_uncertainty_.size() > kRecentFrames) recent_uncertainty_.pop_front();
@@ -252,6 +255,20 @@ void StartProbation(const Frame& frame, int i, MapPoint* point) {
 }
 
 }  // namespace
+
+void Tracker::CorrectRollingShutter(Frame& frame) const {
+  if (options_.rolling_shutter_s <= 0.0 || !velocity_.has_value() || last_ == nullptr ||
+      last_->id != frame.id - 1) {
+    return;
+  }
+  const double dt = frame.timestamp - last_->timestamp;
+  if (dt <= 0.0) return;
+  // The last frame's motion, per second (constant velocity, as the prediction assumes).
+  const Eigen::AngleAxisd turn(velocity_->rotation());
+  frame.features = std::make_shared<const FrameFeatures>(
+      frame.features->AtMiddleRow(turn.axis() * (turn.angle() / dt), velocity_->translation() / dt,
+                                  options_.rolling_shutter_s));
+}
 
 bool Tracker::Initialise(Frame& frame) {
   if (frame.features->CountWithDepth() < options_.min_initial_points) return false;

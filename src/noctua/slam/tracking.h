@@ -48,7 +48,13 @@ struct TrackResult {
   // when the frame has no pose.
   double position_sigma_m = std::numeric_limits<double>::infinity();
   double rotation_sigma_deg = std::numeric_limits<double>::infinity();
+  // How well the pose fits its matches (MedianReprojectionError); infinite without a measured
+  // pose.
+  double residual_px = std::numeric_limits<double>::infinity();
   std::map<std::string, double> stage_ms;  // "track", "local_map", "mapping"
+  // The features as tracked (moved to the middle row's time for a rolling shutter): those a
+  // keyframe made from this frame shares.
+  std::shared_ptr<const FrameFeatures> features;
 };
 
 // Pose of a tracked frame relative to its reference keyframe (ORB-SLAM's convention), so that
@@ -148,6 +154,9 @@ class Tracker {
   // Where the camera should be if it kept its velocity (SlamOptions::motion_prior_*); none
   // without a velocity or before the pose's usual certainty is known.
   std::optional<CentrePrior> MotionPrior() const;
+  // With a rolling shutter (SlamOptions::rolling_shutter_s) and a velocity, the frame's features
+  // as its middle row would have seen them (FrameFeatures::AtMiddleRow).
+  void CorrectRollingShutter(Frame& frame) const;
   bool Coast(TrackResult& result);
   void CreateNewKeyFrame();
   // Maps a new keyframe: all at once, or queued for AdvanceMapping (SlamOptions::
