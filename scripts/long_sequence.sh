@@ -5,6 +5,10 @@
 # groundtruth.txt, a groundtruth.txt giving each new timestamp the source's pose nearest in time
 # to the frame played (none where the nearest is more than 20 ms away), so that
 # `noctua slam --dataset OUT` reports the trajectory error.
+# Played backward, a frame of a rolling-shutter camera still has the shear of the motion it was
+# recorded in, which now runs against the played motion: no camera makes that, and the SLAM's
+# correction (Camera.rolling_shutter_s) then doubles the shear instead of undoing it. Run such a
+# sequence with `Camera.rolling_shutter_s: 0` (docs/slam.md, "Rolling shutter").
 # Usage: scripts/long_sequence.sh <source TUM folder> <output folder> [frames (default 10000)]
 set -euo pipefail
 source_dir=$(cd "$1" && pwd)

@@ -64,6 +64,9 @@ SequenceRun RunOrb(const io::Sequence& sequence, const SlamSetup& setup, bool lo
   config.extractor = features::LoadExtractorOptions(kConfig / "tum_fr1.yaml");
   SlamOptions options = setup.options;
   options.loop_closing.enabled = loop_closing;
+  // Played backward, each frame keeps the rolling shutter's shear of the forward motion: no
+  // correction fits both halves (scripts/long_sequence.sh).
+  options.rolling_shutter_s = 0.0;
   return RunSequence(sequence, setup.camera.depth_factor, setup.camera.Camera(),
                      pipeline::CreateMethod("orb", config)->feature2d(), options, RunOptions());
 }
