@@ -30,10 +30,9 @@ class FrameFeatures {
   // detected position; keypoints outside any depth get depth 0.
   FrameFeatures(std::vector<cv::KeyPoint> keypoints, cv::Mat descriptors, const cv::Mat& depth_m,
                 const geometry::PinholeCamera& camera, double bf, double min_depth_m);
-  // Features restored from a saved map (map_io.h): depth and right coordinate per keypoint as
-  // the constructor above found them; undistorted positions and the grid are derived again.
-  // `undistorted` are the positions as the map had them (AtMiddleRow moves them); empty: derived
-  // from the keypoints again.
+  // Features restored from a saved map (map_io.h): depth, right coordinate and undistorted
+  // position per keypoint as the map had them (AtMiddleRow may have moved the positions; empty
+  // `undistorted`: derived from the keypoints again); the grid is built again.
   FrameFeatures(std::vector<cv::KeyPoint> keypoints, cv::Mat descriptors, std::vector<double> depth,
                 std::vector<double> right_u, const geometry::PinholeCamera& camera,
                 std::vector<Eigen::Vector2d> undistorted = {});
@@ -52,8 +51,8 @@ class FrameFeatures {
   int CountWithDepth() const;
 
   // These features as the middle row would have seen them, for a rolling-shutter camera that
-  // read its rows over `readout_s` (first to last) while moving at `velocity`: the motion per
-  // second as a rotation vector (rad/s) and a translation (m/s) of points in camera coordinates,
+  // read its rows over `readout_s` (first to last) while moving: the motion per second as a
+  // rotation vector (rad/s) and a translation (m/s) of points in camera coordinates,
   // T(t + dt) ~ (I + dt [rotation]x, dt translation) T(t). A keypoint on row y was seen
   // (y / height - 1/2) * readout_s after the middle row; its point is moved back by that much of
   // the motion (lifted with its depth, or along its ray without one: there the turn alone) and

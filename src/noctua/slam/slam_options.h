@@ -101,7 +101,8 @@ struct SlamOptions {
   // fast turn the image is sheared: on tum_fr1_rpy_200 rows 480 apart are 1-2 degrees of turn
   // apart. Tracking moves every keypoint to where the middle row would have seen it, along the
   // constant-velocity motion (FrameFeatures::AtMiddleRow). Measured, not looked up: the value
-  // that tracks most inliers (scripts/rolling_shutter_sweep.sh, no ground truth needed).
+  // that leaves the least reprojection residual (scripts/rolling_shutter_sweep.sh, no ground
+  // truth needed).
   double rolling_shutter_s = 0.0;
   // Depth readings beyond this are ignored (0: no limit). For experiments that take depth away
   // from far surfaces, as a sensor of shorter range would (docs/slam.md "Triangulated points").
