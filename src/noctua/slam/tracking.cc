@@ -77,8 +77,7 @@ Tracker::Tracker(const SlamOptions& options)
 TrackResult Tracker::Track(Frame frame) {
   TrackResult result;
   current_ = std::make_unique<Frame>(std::move(frame));
-  CorrectRollingShutter(*current_);
-  result.features = current_->features;
+  bool corrected = velocity_.has_value() && CorrectRollingShutter(*current_, *velocity_);
   tracked_prior_.reset();
   mapper_.CollectBundleAdjustment(/*wait=*/false);
   Stopwatch watch;
@@ -105,6 +104,11 @@ TrackResult Tracker::Track(Frame frame) {
     } else {
       ok = Relocalise();
       result.method = "relocalisation";
+    }
+    // A frame that had no velocity to undo its shear with (the first after the map's start or a
+    // relocalisation) takes the motion from the last frame to its first pose.
+    if (ok && !corrected && last_ != nullptr) {
+      corrected = CorrectRollingShutter(*current_, current_->pose_cw * last_->pose_cw.inverse());
     }
     result.stage_ms["track"] = watch.ElapsedMs();
     watch.Restart();
@@ -160,6 +164,7 @@ TrackResult Tracker::Track(Frame frame) {
     ClearTemporaryPoints();
   }
   if (state_ == TrackingState::kNotInitialised && ok) state_ = TrackingState::kOk;
+  result.features = current_->features;
   result.moving = current_->moving;
   result.moving_keypoints =
       static_cast<int>(std::count(result.moving.begin(), result.moving.end(), true));
@@ -256,18 +261,16 @@ void StartProbation(const Frame& frame, int i, MapPoint* point) {
 
 }  // namespace
 
-void Tracker::CorrectRollingShutter(Frame& frame) const {
-  if (options_.rolling_shutter_s <= 0.0 || !velocity_.has_value() || last_ == nullptr ||
-      last_->id != frame.id - 1) {
-    return;
+bool Tracker::CorrectRollingShutter(Frame& frame, const geometry::Pose& velocity) const {
+  if (options_.rolling_shutter_s <= 0.0 || last_ == nullptr || last_->id != frame.id - 1) {
+    return false;
   }
   const double dt = frame.timestamp - last_->timestamp;
-  if (dt <= 0.0) return;
-  // The last frame's motion, per second (constant velocity, as the prediction assumes).
-  const Eigen::AngleAxisd turn(velocity_->rotation());
-  frame.features = std::make_shared<const FrameFeatures>(
-      frame.features->AtMiddleRow(turn.axis() * (turn.angle() / dt), velocity_->translation() / dt,
-                                  options_.rolling_shutter_s));
+  if (dt <= 0.0) return false;
+  const Eigen::AngleAxisd turn(velocity.rotation());
+  frame.features = std::make_shared<const FrameFeatures>(frame.features->AtMiddleRow(
+      turn.axis() * (turn.angle() / dt), velocity.translation() / dt, options_.rolling_shutter_s));
+  return true;
 }
 
 bool Tracker::Initialise(Frame& frame) {

@@ -154,9 +154,11 @@ class Tracker {
   // Where the camera should be if it kept its velocity (SlamOptions::motion_prior_*); none
   // without a velocity or before the pose's usual certainty is known.
   std::optional<CentrePrior> MotionPrior() const;
-  // With a rolling shutter (SlamOptions::rolling_shutter_s) and a velocity, the frame's features
-  // as its middle row would have seen them (FrameFeatures::AtMiddleRow).
-  void CorrectRollingShutter(Frame& frame) const;
+  // With a rolling shutter (SlamOptions::rolling_shutter_s), replaces the frame's features with
+  // those its middle row would have seen (FrameFeatures::AtMiddleRow), the camera moving by
+  // `velocity` (T_frame_last) since the last frame; false (nothing done) without a rolling
+  // shutter or when the last frame is not the one before.
+  bool CorrectRollingShutter(Frame& frame, const geometry::Pose& velocity) const;
   bool Coast(TrackResult& result);
   void CreateNewKeyFrame();
   // Maps a new keyframe: all at once, or queued for AdvanceMapping (SlamOptions::
