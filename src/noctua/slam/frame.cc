@@ -62,7 +62,8 @@ FrameFeatures::FrameFeatures(std::vector<cv::KeyPoint> keypoints, cv::Mat descri
 FrameFeatures FrameFeatures::AtMiddleRow(const Eigen::Vector3d& rotation_per_s,
                                          const Eigen::Vector3d& translation_per_s,
                                          double readout_s) const {
-  FrameFeatures moved = *this;
+  std::vector<Eigen::Vector2d> undistorted = undistorted_;
+  std::vector<double> right_u = right_u_;
   const double height = camera_.height();
   for (std::size_t i = 0; i < keypoints_.size(); ++i) {
     const double dt = (keypoints_[i].pt.y / height - 0.5) * readout_s;
@@ -73,11 +74,13 @@ FrameFeatures FrameFeatures::AtMiddleRow(const Eigen::Vector3d& rotation_per_s,
     if (depth > 0.0) at_middle -= dt * translation_per_s;
     if (at_middle.z() <= 0.0) continue;
     const Eigen::Vector2d pixel = camera_.Project(at_middle);
-    if (depth > 0.0) moved.right_u_[i] += pixel.x() - undistorted_[i].x();
-    moved.undistorted_[i] = pixel;
+    if (depth > 0.0) right_u[i] += pixel.x() - undistorted_[i].x();
+    undistorted[i] = pixel;
   }
-  moved.BuildGrid();
-  return moved;
+  // The restoring constructor builds the grid once for the moved positions (a copy of *this
+  // would copy the old grid only to rebuild it).
+  return FrameFeatures(keypoints_, descriptors_, depth_, std::move(right_u), camera_,
+                       std::move(undistorted));
 }
 
 void FrameFeatures::CheckDescriptors() const {
