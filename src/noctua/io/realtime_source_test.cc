@@ -3,6 +3,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <thread>
 
@@ -12,6 +13,7 @@
 namespace noctua::io {
 namespace {
 
+using ::testing::ElementsAre;
 using ::testing::HasSubstr;
 
 // `count` tiny frames 1/30 s apart, made on demand.
@@ -61,9 +63,9 @@ TEST(LatestFrameSlotTest, HandsOnTheProducersErrorAfterItsFrames) {
   EXPECT_THROW(slot.Take(), Error);
 }
 
-// A reader that takes every frame at once misses none; one that takes the first frame and then
-// nothing until the end gets the last frame only. Either way, taken + dropped is every frame, in
-// order.
+// A reader that takes every frame at once misses none; one that takes a frame and then nothing
+// until the end gets that frame and the last one only. Either way, taken + dropped is every frame,
+// once each.
 TEST(RealTimeSourceTest, EveryFrameIsEitherTakenOrDropped) {
   RealTimeSource fast_reader(std::make_unique<GeneratedSource>(10), 30.0);
   int taken = 0;
@@ -71,26 +73,32 @@ TEST(RealTimeSourceTest, EveryFrameIsEitherTakenOrDropped) {
   EXPECT_EQ(taken + static_cast<int>(fast_reader.dropped().size()), 10);
 
   RealTimeSource late_reader(std::make_unique<GeneratedSource>(10), 100.0);
-  ASSERT_EQ(late_reader.Next()->index, 0);
-  // The other 9 frames at 100x 30 Hz arrive within 3 ms; the reader comes after all of them.
+  // Frames come 0.33 ms apart at 100x 30 Hz: a reader slowed by a loaded machine may get a later
+  // frame than 0 first, so the test asks only that nothing is lost or handed out twice.
+  const std::optional<SourceFrame> first = late_reader.Next();
+  ASSERT_TRUE(first.has_value());
   for (int wait = 0; wait < 1000 && late_reader.dropped().size() < 8; ++wait) {
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
-  const std::optional<SourceFrame> last = late_reader.Next();
-  ASSERT_TRUE(last.has_value());
-  EXPECT_EQ(last->index, 9);
-  EXPECT_FALSE(late_reader.Next().has_value());
-  const std::vector<DroppedFrame> dropped = late_reader.dropped();
-  ASSERT_EQ(dropped.size(), 8U);
-  for (int i = 0; i < 8; ++i) EXPECT_EQ(dropped[i].index, i + 1);
+  std::vector<int> taken_late = {first->index};
+  while (const std::optional<SourceFrame> frame = late_reader.Next()) {
+    taken_late.push_back(frame->index);
+  }
+  EXPECT_EQ(taken_late.back(), 9);
+  EXPECT_LE(taken_late.size(), 2U);
+  std::vector<int> seen = taken_late;
+  for (const DroppedFrame& dropped : late_reader.dropped()) seen.push_back(dropped.index);
+  std::sort(seen.begin(), seen.end());
+  EXPECT_THAT(seen, ElementsAre(0, 1, 2, 3, 4, 5, 6, 7, 8, 9));
 }
 
 // The recording starts playing when the reader first asks for a frame, not when the source is
 // made: a reader that gets ready slowly (loads a detector) first misses no frame for it.
 TEST(RealTimeSourceTest, PlaysFromTheFirstFrameAskedFor) {
-  RealTimeSource replay(std::make_unique<GeneratedSource>(3), 100.0);
-  // Three frames at 100x 30 Hz take 0.7 ms to play: long over by now, had the clock started.
-  std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  RealTimeSource replay(std::make_unique<GeneratedSource>(3), 1.0);
+  // Three frames at 30 Hz take 67 ms to play: over by now, had the clock started. Frames 33 ms
+  // apart leave a reader on a loaded machine time to take frame 0 before frame 1 replaces it.
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));
   EXPECT_TRUE(replay.dropped().empty());
   const std::optional<SourceFrame> first = replay.Next();
   ASSERT_TRUE(first.has_value());
