@@ -334,10 +334,13 @@ SequenceRun RunFrames(RgbdSlam& slam, io::FrameSource& source, const RunOptions&
   std::optional<OrderedProducer<LoadedFrame>> loader;
   std::optional<OrderedProducer<PreparedFrame>> extraction;
   if (run_options.overlap_extraction) {
-    loader.emplace(real_time ? 1 : std::max(2, load_ahead), load);
+    // A real-time source decodes on its own thread; the extraction takes the newest frame from
+    // it when free. A loader in between would hold a frame that grows stale while the frame
+    // before it is extracted.
+    if (!real_time) loader.emplace(std::max(2, load_ahead), load);
     extraction.emplace(real_time ? 1 : run_options.extraction_queue,
                        [&]() -> std::optional<PreparedFrame> {
-                         std::optional<LoadedFrame> loaded = loader->Pop();
+                         std::optional<LoadedFrame> loaded = loader ? loader->Pop() : load();
                          if (!loaded) return std::nullopt;
                          return extract(std::move(*loaded));
                        });

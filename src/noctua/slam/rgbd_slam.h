@@ -181,9 +181,10 @@ struct RunOptions {
 
 // Runs the SLAM over the frames of a source until it has none left (or max_frames, or stop).
 // With a real-time source (FrameSource::real_time) the SLAM takes frames from it as fast as it
-// can, holding one loaded and one extracted frame at most (extraction_queue and
-// lookahead_frames apply to recordings read as fast as possible): a frame it cannot take in time
-// is dropped at the source rather than queued. Mapping then runs only while no frame waits.
+// can: the extraction thread takes the newest frame when it is free (no loading thread), and
+// holds one extracted frame at most (extraction_queue and lookahead_frames apply to recordings
+// read as fast as possible): a frame it cannot take in time is dropped at the source rather than
+// queued. Mapping then runs only while no frame waits.
 SequenceRun RunFrames(io::FrameSource& source, const geometry::PinholeCamera& camera,
                       cv::Ptr<cv::Feature2D> extractor, const SlamOptions& options,
                       const RunOptions& run_options = RunOptions());
