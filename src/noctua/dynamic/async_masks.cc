@@ -3,12 +3,8 @@
 #include <cstdlib>
 #include <opencv2/imgproc.hpp>
 
-#ifdef __linux__
-#include <pthread.h>
-#include <sched.h>
-#endif
-
 #include "noctua/util/error.h"
+#include "noctua/util/thread_priority.h"
 
 namespace noctua::dynamic {
 
@@ -17,20 +13,6 @@ void AsyncMaskOptions::Check() const {
   CheckOption(carried_growth_px >= 0 && carried_growth_px <= 100,
               "async detection carried_growth_px must be in [0, 100]");
 }
-
-namespace {
-
-// Best effort: a thread may always lower its own priority, but where the system offers no idle
-// class the detector simply keeps the normal one.
-void LowerThisThreadsPriority() {
-#ifdef __linux__
-  sched_param param{};
-  param.sched_priority = 0;
-  pthread_setschedparam(pthread_self(), SCHED_IDLE, &param);
-#endif
-}
-
-}  // namespace
 
 AsyncMaskPipeline::AsyncMaskPipeline(std::shared_ptr<Detector> detector, MotionLevelTable table,
                                      DynamicMaskOptions mask_options,
@@ -46,7 +28,7 @@ AsyncMaskPipeline::AsyncMaskPipeline(std::shared_ptr<Detector> detector, MotionL
     if (async_options_.wait_for_detection) {
       Work();
     } else {
-      LowerThisThreadsPriority();
+      RunThisThreadWhenIdle();
       DetectNewest();
     }
   });

@@ -1,6 +1,8 @@
 #include "noctua/util/thread_priority.h"
 
 #if defined(__linux__)
+#include <pthread.h>
+#include <sched.h>
 #include <sys/resource.h>
 #include <unistd.h>
 
@@ -23,10 +25,17 @@ bool LowerThisThreadsPriority(int nice_steps) {
          0;
 }
 
+bool RunThisThreadWhenIdle() {
+  sched_param param{};
+  param.sched_priority = 0;
+  return pthread_setschedparam(pthread_self(), SCHED_IDLE, &param) == 0;
+}
+
 #else
 
 int ThisThreadsNice() { return 0; }
 bool LowerThisThreadsPriority(int /*nice_steps*/) { return false; }
+bool RunThisThreadWhenIdle() { return false; }
 
 #endif
 

@@ -5,6 +5,10 @@
 #include <algorithm>
 #include <thread>
 
+#if defined(__linux__)
+#include <sched.h>
+#endif
+
 namespace noctua {
 namespace {
 
@@ -21,6 +25,21 @@ TEST(ThreadPriority, LowersTheCallingThreadOnly) {
   EXPECT_EQ(lowered, std::min(before + 5, 19));
   EXPECT_EQ(ThisThreadsNice(), before);
 }
+
+#if defined(__linux__)
+TEST(ThreadPriority, MovesTheCallingThreadOnlyToTheIdleClass) {
+  int policy = -1;
+  bool changed = false;
+  std::thread worker([&] {
+    changed = RunThisThreadWhenIdle();
+    policy = sched_getscheduler(0);
+  });
+  worker.join();
+  ASSERT_TRUE(changed);
+  EXPECT_EQ(policy, SCHED_IDLE);
+  EXPECT_NE(sched_getscheduler(0), SCHED_IDLE);
+}
+#endif
 
 }  // namespace
 }  // namespace noctua
