@@ -328,15 +328,14 @@ SequenceRun RunFrames(RgbdSlam& slam, io::FrameSource& source, const RunOptions&
   bool started = false;
   const Stopwatch run_watch;
   // Overlapped: loading (PNG decoding, as long as a `paper` extraction on one core) and
-  // extraction each on a thread of their own, frames flowing in order from one to the next.
-  // Declared after everything they use and in this order, so that the extraction thread (which
-  // takes from the loader) stops first.
+  // extraction each on a thread of their own, frames flowing in order from one to the next. A
+  // real-time source decodes on its own thread, so there the extraction loads for itself: it
+  // takes the newest frame when free, where a loader would hold one that grows stale while the
+  // frame before it is extracted. Declared after everything they use and in this order, so that
+  // the extraction thread (which takes from the loader) stops first.
   std::optional<OrderedProducer<LoadedFrame>> loader;
   std::optional<OrderedProducer<PreparedFrame>> extraction;
   if (run_options.overlap_extraction) {
-    // A real-time source decodes on its own thread; the extraction takes the newest frame from
-    // it when free. A loader in between would hold a frame that grows stale while the frame
-    // before it is extracted.
     if (!real_time) loader.emplace(std::max(2, load_ahead), load);
     extraction.emplace(real_time ? 1 : run_options.extraction_queue,
                        [&]() -> std::optional<PreparedFrame> {
