@@ -91,6 +91,9 @@ void RealTimeSource::Play() {
                        std::chrono::duration<double>((frame->timestamp - first_timestamp) / rate_));
       if (changed_.wait_until(lock, due, [this] { return stop_; })) break;
       lock.unlock();
+      // A camera hands a frame over when it is due; where the replay's decoding ran late, the
+      // frame's latency still counts from then.
+      frame->arrival = due;
       slot_.Put(std::move(*frame));
     }
     slot_.Close();

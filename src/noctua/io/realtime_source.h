@@ -34,7 +34,8 @@ class LatestFrameSlot {
 };
 
 // Plays a recording at `rate` times the speed its timestamps give (1: as recorded): frame k is
-// offered (t_k - t_0) / rate after frame 0, loaded ahead of its time on a thread of its own.
+// offered (t_k - t_0) / rate after frame 0, loaded ahead of its time on a thread of its own, and
+// arrives then (SourceFrame::arrival), even where loading it took longer.
 // A reader still busy when frames arrive gets only the newest; the others are dropped(), so that
 // what a live camera does to a slow SLAM can be reproduced on a recording. Frame 0 is loaded at
 // once but offered at the first Next(), where the clock starts: a reader's own start-up (loading

@@ -105,6 +105,35 @@ TEST(RealTimeSourceTest, PlaysFromTheFirstFrameAskedFor) {
   EXPECT_EQ(first->index, 0);
 }
 
+// A frame arrives when the recording's clock says, even where loading it took longer (a PNG
+// decoded on a busy core): what the SLAM's latency counts from is when a camera would have
+// handed it over.
+TEST(RealTimeSourceTest, AFrameLoadedLateArrivesWhenItWasDue) {
+  class SlowSource : public GeneratedSource {
+   public:
+    SlowSource() : GeneratedSource(2) {}
+    std::optional<SourceFrame> Next() override {
+      if (loaded_++ > 0) std::this_thread::sleep_for(std::chrono::milliseconds(60));
+      return GeneratedSource::Next();
+    }
+
+   private:
+    int loaded_ = 0;
+  };
+  RealTimeSource replay(std::make_unique<SlowSource>(), 1.0);
+  const std::optional<SourceFrame> first = replay.Next();
+  const std::optional<SourceFrame> second = replay.Next();
+  const auto taken = std::chrono::steady_clock::now();
+  ASSERT_TRUE(first.has_value() && second.has_value());
+  ASSERT_TRUE(first->arrival.has_value() && second->arrival.has_value());
+  // Frame 1 takes 60 ms to load, frame 0 is offered at once: frame 1 is taken at least 60 ms
+  // after frame 0 arrived, yet arrives 1/30 s after it, as recorded.
+  EXPECT_GE(taken - *first->arrival, std::chrono::milliseconds(60));
+  const double apart_ms =
+      std::chrono::duration<double, std::milli>(*second->arrival - *first->arrival).count();
+  EXPECT_NEAR(apart_ms, 1000.0 / 30.0, 0.01);
+}
+
 // A source that is never read ends cleanly: its player, holding frame 0 until asked, is stopped.
 TEST(RealTimeSourceTest, ASourceNeverReadEndsCleanly) {
   const RealTimeSource unread(std::make_unique<GeneratedSource>(3), 30.0);
