@@ -33,11 +33,12 @@ target_ms=${TARGET_MS:-60}
 for file in "$noctua" "$dataset" "$config"; do
   [ -e "$file" ] || { echo "realtime_latency: $file: not found (run scripts/setup.sh first)" >&2; exit 1; }
 done
-case " $detectors " in
-  *" yolov8n "*) [ -e "$detector" ] || { echo "realtime_latency: $detector: not found" >&2; exit 1; } ;;
-esac
 for mode in $detectors; do
-  case $mode in none | yolov8n) ;; *) echo "realtime_latency: unknown detector '$mode' (none, yolov8n)" >&2; exit 1 ;; esac
+  case $mode in
+    none) ;;
+    yolov8n) [ -e "$detector" ] || { echo "realtime_latency: $detector: not found" >&2; exit 1; } ;;
+    *) echo "realtime_latency: unknown detector '$mode' (none, yolov8n)" >&2; exit 1 ;;
+  esac
 done
 for mode in $frames_modes; do
   case $mode in png | preloaded) ;; *) echo "realtime_latency: unknown frames '$mode' (png, preloaded)" >&2; exit 1 ;; esac
