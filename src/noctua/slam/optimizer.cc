@@ -8,8 +8,10 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <optional>
 #include <set>
 
+#include "noctua/slam/pose_solver.h"
 #include "noctua/slam/reprojection_cost.h"
 
 namespace noctua::slam {
@@ -66,20 +68,6 @@ ceres::Solver::Options SolverOptions(int iterations, ceres::LinearSolverType sol
   options.minimizer_progress_to_stdout = false;
   return options;
 }
-
-// (centre - predicted) / sigma, where the centre of pose_cw = (q, t) is -R(q)ᵀ t.
-struct CentrePriorCost {
-  Eigen::Vector3d centre;
-  double inverse_sigma;
-  template <typename T>
-  bool operator()(const T* rotation, const T* translation, T* residual) const {
-    const Eigen::Quaternion<T> q(rotation[3], rotation[0], rotation[1], rotation[2]);
-    const Eigen::Matrix<T, 3, 1> t(translation[0], translation[1], translation[2]);
-    const Eigen::Matrix<T, 3, 1> c = -(q.conjugate() * t);
-    for (int i = 0; i < 3; ++i) residual[i] = (c[i] - T(centre[i])) * T(inverse_sigma);
-    return true;
-  }
-};
 
 }  // namespace
 
@@ -163,47 +151,30 @@ int OptimizePose(Frame& frame, const ScalePyramid& pyramid, double bf, const Cen
 
   const geometry::Pose initial = frame.pose_cw;
   geometry::Pose estimate = initial;
-  ceres::HuberLoss huber_mono(std::sqrt(kChi2Mono));
-  ceres::HuberLoss huber_stereo(std::sqrt(kChi2Stereo));
-  // Residuals are in σ, so Cauchy's scale is the prior's outlier_sigmas.
-  ceres::CauchyLoss prior_loss(
-      prior != nullptr && prior->outlier_sigmas > 0.0 ? prior->outlier_sigmas : 1.0);
+  std::optional<PoseCentreTerm> centre_term;
+  if (prior != nullptr && prior->sigma_m > 0.0) {
+    centre_term =
+        PoseCentreTerm{prior->centre, 1.0 / prior->sigma_m, std::max(prior->outlier_sigmas, 0.0)};
+  }
+  std::vector<PoseObservation> observations;
+  observations.reserve(matched.size());
   int inliers = 0;
   constexpr int kRounds = 4;
   for (int round = 0; round < kRounds; ++round) {
     // Each round starts again from the prediction (ORB-SLAM), with the current inlier set.
-    PoseBlock block(initial);
-    ceres::Problem::Options problem_options;
-    problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-    ceres::Problem problem(problem_options);
-    problem.AddParameterBlock(block.rotation.data(), 4, new LeftQuaternionManifold);
-    problem.AddParameterBlock(block.translation.data(), 3);
     const bool robust = round < kRounds - 1;
-    int residual_blocks = 0;
+    observations.clear();
     for (int i : matched) {
       if (frame.outlier[static_cast<std::size_t>(i)]) continue;
       if (on_probation != nullptr && (*on_probation)[static_cast<std::size_t>(i)]) continue;
       const Observation o = ObservationOf(features, i, pyramid);
-      const Eigen::Vector3d point = frame.map_points[static_cast<std::size_t>(i)]->position();
-      if (o.stereo) {
-        problem.AddResidualBlock(new PoseOnlyCost<3>(k, o, point), robust ? &huber_stereo : nullptr,
-                                 block.rotation.data(), block.translation.data());
-      } else {
-        problem.AddResidualBlock(new PoseOnlyCost<2>(k, o, point), robust ? &huber_mono : nullptr,
-                                 block.rotation.data(), block.translation.data());
-      }
-      ++residual_blocks;
+      const double huber_delta = robust ? std::sqrt(o.stereo ? kChi2Stereo : kChi2Mono) : 0.0;
+      observations.push_back(
+          {o, frame.map_points[static_cast<std::size_t>(i)]->position(), huber_delta});
     }
-    if (residual_blocks < 3) break;
-    if (prior != nullptr && prior->sigma_m > 0.0) {
-      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<CentrePriorCost, 3, 4, 3>(
-                                   new CentrePriorCost{prior->centre, 1.0 / prior->sigma_m}),
-                               prior->outlier_sigmas > 0.0 ? &prior_loss : nullptr,
-                               block.rotation.data(), block.translation.data());
-    }
-    ceres::Solver::Summary summary;
-    ceres::Solve(SolverOptions(10, ceres::DENSE_QR), &problem, &summary);
-    estimate = block.ToPose();
+    if (observations.size() < 3) break;
+    estimate = SolvePose(k, observations, centre_term ? &*centre_term : nullptr, initial,
+                         /*max_iterations=*/10);
 
     inliers = 0;
     for (int i : matched) {

@@ -16,7 +16,7 @@ namespace noctua::slam {
 inline constexpr double kChi2Mono = 5.991;
 inline constexpr double kChi2Stereo = 7.815;
 
-// Motion-only optimisation of frame.pose_cw against its matched map points (Ceres, Huber loss).
+// Motion-only optimisation of frame.pose_cw against its matched map points (SolvePose, Huber loss).
 // Four rounds; after each, matches whose χ² exceeds the threshold are flagged outliers and left
 // out of the next round, and earlier outliers that fit again come back (ORB-SLAM's scheme; the
 // last round is without the robust loss). Returns the number of inliers.
