@@ -110,30 +110,6 @@ void ProjectWithJacobians(const Intrinsics& k, const Observation& o, const Eigen
   }
 }
 
-// Reprojection error with the point fixed (motion-only optimisation), analytic Jacobians.
-template <int kResiduals>
-class PoseOnlyCost final : public ceres::SizedCostFunction<kResiduals, 4, 3> {
- public:
-  PoseOnlyCost(const Intrinsics& k, const Observation& o, const Eigen::Vector3d& point)
-      : k_(k), o_(o), point_(point) {}
-  bool Evaluate(double const* const* parameters, double* residuals,
-                double** jacobians) const override {
-    const Eigen::Map<const Eigen::Quaterniond> q(parameters[0]);
-    const Eigen::Map<const Eigen::Vector3d> t(parameters[1]);
-    const Eigen::Vector3d rotated = q * point_;
-    const Eigen::Vector3d p = rotated + t;
-    ProjectWithJacobians<kResiduals>(
-        k_, o_, p, rotated, residuals, jacobians != nullptr ? jacobians[0] : nullptr,
-        jacobians != nullptr ? jacobians[1] : nullptr, nullptr, nullptr);
-    return true;
-  }
-
- private:
-  Intrinsics k_;
-  Observation o_;
-  Eigen::Vector3d point_;
-};
-
 // Reprojection error with pose and point free (bundle adjustment), analytic Jacobians.
 template <int kResiduals>
 class FullCost final : public ceres::SizedCostFunction<kResiduals, 4, 3, 3> {

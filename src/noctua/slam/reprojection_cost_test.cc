@@ -71,17 +71,6 @@ void ExpectJacobiansMatchAutoDiff(std::mt19937& random) {
   EXPECT_TRUE(tangent.isApprox(expected_tangent, 1e-8)) << tangent << "\n\n" << expected_tangent;
   EXPECT_TRUE(j_translation.isApprox(expected_translation, 1e-10));
   EXPECT_TRUE(j_point.isApprox(expected_point, 1e-10));
-
-  // The pose-only cost is the full cost with the point held.
-  double pose_residuals[kResiduals];
-  Eigen::Matrix<double, kResiduals, 4, Eigen::RowMajor> pose_rotation;
-  Eigen::Matrix<double, kResiduals, 3, Eigen::RowMajor> pose_translation;
-  double* pose_jacobians[2] = {pose_rotation.data(), pose_translation.data()};
-  ASSERT_TRUE(PoseOnlyCost<kResiduals>(kIntrinsics, o, x)
-                  .Evaluate(parameters, pose_residuals, pose_jacobians));
-  for (int i = 0; i < kResiduals; ++i) EXPECT_NEAR(pose_residuals[i], residuals[i], 1e-12);
-  EXPECT_TRUE(pose_rotation.isApprox(j_rotation, 1e-12));
-  EXPECT_TRUE(pose_translation.isApprox(j_translation, 1e-12));
 }
 
 // The depth residual is the disparity's error alone: an error in u shows in the first residual
@@ -138,12 +127,14 @@ TEST(ReprojectionCost, RecoversAKnownPose) {
   ceres::Problem problem;
   problem.AddParameterBlock(rotation, 4, new LeftQuaternionManifold);
   problem.AddParameterBlock(translation, 3);
+  // The points held: the motion-only problem.
   for (std::size_t i = 0; i < points.size(); ++i) {
-    ceres::CostFunction* cost = observations[i].stereo
-                                    ? static_cast<ceres::CostFunction*>(new PoseOnlyCost<3>(
-                                          kIntrinsics, observations[i], points[i]))
-                                    : new PoseOnlyCost<2>(kIntrinsics, observations[i], points[i]);
-    problem.AddResidualBlock(cost, nullptr, rotation, translation);
+    ceres::CostFunction* cost =
+        observations[i].stereo
+            ? static_cast<ceres::CostFunction*>(new FullCost<3>(kIntrinsics, observations[i]))
+            : new FullCost<2>(kIntrinsics, observations[i]);
+    problem.AddResidualBlock(cost, nullptr, rotation, translation, points[i].data());
+    problem.SetParameterBlockConstant(points[i].data());
   }
   ceres::Solver::Options options;
   options.linear_solver_type = ceres::DENSE_QR;
