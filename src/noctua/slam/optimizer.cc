@@ -151,6 +151,7 @@ int OptimizePose(Frame& frame, const ScalePyramid& pyramid, double bf, const Cen
 
   const geometry::Pose initial = frame.pose_cw;
   geometry::Pose estimate = initial;
+  // The prior's residual is in σ, so Cauchy's scale is its outlier_sigmas.
   std::optional<PoseCentreTerm> centre_term;
   if (prior != nullptr && prior->sigma_m > 0.0) {
     centre_term =
