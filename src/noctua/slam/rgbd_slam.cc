@@ -82,6 +82,13 @@ TrackResult RgbdSlam::Track(Extracted extracted, bool advance_mapping) {
   return result;
 }
 
+int RgbdSlam::ForgetMapPointsIn(double timestamp, const cv::Mat& region) {
+  if (region.type() != CV_8UC1 || region.size() != camera_.size()) {
+    throw Error("slam: a region to forget must be CV_8U of the camera's size");
+  }
+  return tracker_.ForgetMapPointsIn(timestamp, region);
+}
+
 io::Trajectory RgbdSlam::Trajectory() {
   FinishMapping();
   std::vector<io::StampedPose> poses;
@@ -347,6 +354,7 @@ SequenceRun RunFrames(RgbdSlam& slam, io::FrameSource& source, const RunOptions&
   // The slice of mapping run after the last frame was tracked, while this one was extracted: it
   // counts in this frame's time (its "mapping" and "total" stages).
   double mapping_slice_ms = 0.0;
+  std::vector<std::pair<int, cv::Mat>> late_regions;  // RunOptions::late_dynamic_regions
   for (int i = 0;; ++i) {
     if (run_options.stop && run_options.stop()) {
       run.interrupted = true;
@@ -383,6 +391,19 @@ SequenceRun RunFrames(RgbdSlam& slam, io::FrameSource& source, const RunOptions&
     if (run_options.observe) {
       run_options.observe({index, prepared->bgr, result.features.get(), &result, &run.frames.back(),
                            LastPose(slam.tracker()), &slam.tracker().map()});
+    }
+    if (run_options.late_dynamic_regions) {
+      // A region may come for a frame already extracted but not yet tracked: it waits for it.
+      for (auto& late : run_options.late_dynamic_regions()) {
+        if (late.first < 0) throw Error("slam: a late dynamic region for a negative frame");
+        late_regions.push_back(std::move(late));
+      }
+      std::erase_if(late_regions, [&](const std::pair<int, cv::Mat>& late) {
+        if (late.first >= static_cast<int>(run.frames.size())) return false;
+        slam.ForgetMapPointsIn(run.frames[static_cast<std::size_t>(late.first)].timestamp,
+                               late.second);
+        return true;
+      });
     }
     if (run_options.progress) run_options.progress(i, count, run.frames.back());
     const bool frame_waiting = real_time && extraction && extraction->HasReady();

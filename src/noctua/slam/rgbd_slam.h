@@ -6,6 +6,7 @@
 #include <opencv2/features2d.hpp>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "noctua/geometry/camera.h"
@@ -52,6 +53,10 @@ class RgbdSlam {
   double AdvanceMapping(std::optional<int> stages = std::nullopt) {
     return tracker_.AdvanceMapping(stages);
   }
+
+  // Tracker::ForgetMapPointsIn. Throws noctua::Error when `region` is not CV_8U of the camera's
+  // size.
+  int ForgetMapPointsIn(double timestamp, const cv::Mat& region);
 
   // T_world_camera of every tracked frame (lost frames and frames before the map exist are
   // left out rather than guessed), with the latest keyframe poses (after the bundle adjustment
@@ -177,6 +182,12 @@ struct RunOptions {
   // The frame's depth (CV_32F metres) comes with it, e.g. to cut dynamic regions to depth.
   std::function<void(const cv::Mat& bgr, const cv::Mat& depth_m)> lookahead;
   int lookahead_frames = 3;
+  // Called after every frame is tracked: dynamic regions that became known only after their frames
+  // were tracked (in real time, frames that came before the first detection finished:
+  // dynamic::AsyncMaskPipeline::TakeLateMasks), as (position in the run, CV_8U mask). The map
+  // points those frames' keyframes made there are culled (RgbdSlam::ForgetMapPointsIn), once the
+  // frame is tracked where it was only extracted.
+  std::function<std::vector<std::pair<int, cv::Mat>>()> late_dynamic_regions;
 };
 
 // Runs the SLAM over the frames of a source until it has none left (or max_frames, or stop).

@@ -620,6 +620,68 @@ TEST_F(RgbdSlamTest, LookaheadSeesEveryFrameInOrderAheadOfItsExtraction) {
       ::testing::ThrowsMessage<Error>(HasSubstr("lookahead_frames")));
 }
 
+// A dynamic region known only once its frame was tracked (in real time, frames that came before
+// the first detection finished): the points the frame's keyframe made there are culled, the others
+// kept, and the next frame makes a keyframe.
+TEST_F(RgbdSlamTest, ForgetsTheFirstKeyFramesPointsInALateDynamicRegion) {
+  RgbdSlam slam(setup_->camera.Camera(), Orb(*setup_), setup_->options);
+  const auto process = [&](int i) {
+    const io::Frame& frame = sequence_->frame(static_cast<std::size_t>(i));
+    const io::FrameImages images = sequence_->Load(frame, setup_->camera.depth_factor);
+    return slam.Process(images.bgr, images.depth_m, frame.timestamp);
+  };
+  ASSERT_NE(process(0).state, TrackingState::kNotInitialised);
+  const KeyFrame* first = slam.tracker().map().KeyFrames().front();
+  cv::Mat left(setup_->camera.Camera().size(), CV_8UC1, cv::Scalar(0));
+  left.colRange(0, left.cols / 2).setTo(255);
+  const auto good_points = [&](bool on_left) {
+    int count = 0;
+    for (int i = 0; i < first->features().size(); ++i) {
+      const MapPoint* point = first->map_point(i);
+      const bool left_side = cvRound(first->features().keypoint(i).pt.x) < left.cols / 2;
+      count += point != nullptr && !point->bad() && left_side == on_left;
+    }
+    return count;
+  };
+  const int on_left = good_points(true);
+  const int on_right = good_points(false);
+  ASSERT_GT(on_left, 100);
+  ASSERT_GT(on_right, 100);
+  EXPECT_EQ(slam.ForgetMapPointsIn(first->timestamp() + 1.0, left), 0);  // no such keyframe
+  EXPECT_EQ(slam.ForgetMapPointsIn(first->timestamp(), left), on_left);
+  EXPECT_EQ(good_points(true), 0);
+  EXPECT_EQ(good_points(false), on_right);
+  // The map is refilled from the scene behind: a camera that stands still (frame 0 again) makes
+  // no keyframe, but after the forgetting the next frame makes one.
+  const auto first_new_keyframe = [&](RgbdSlam& run) {
+    const io::Frame& frame = sequence_->frame(0);
+    const io::FrameImages images = sequence_->Load(frame, setup_->camera.depth_factor);
+    for (int i = 1; i <= 12; ++i) {
+      const TrackResult result =
+          run.Process(images.bgr, images.depth_m, frame.timestamp + i / 30.0);
+      EXPECT_EQ(result.state, TrackingState::kOk) << "frame " << i;
+      if (result.new_keyframe) return i;
+    }
+    return -1;
+  };
+  RgbdSlam still(setup_->camera.Camera(), Orb(*setup_), setup_->options);
+  const io::FrameImages images = sequence_->Load(sequence_->frame(0), setup_->camera.depth_factor);
+  still.Process(images.bgr, images.depth_m, sequence_->frame(0).timestamp);
+  EXPECT_EQ(first_new_keyframe(still), -1);
+  EXPECT_EQ(first_new_keyframe(slam), 1);
+  EXPECT_THROW(slam.ForgetMapPointsIn(first->timestamp(), cv::Mat(10, 10, CV_8UC1)), Error);
+
+  RunOptions options;
+  options.max_frames = 3;
+  options.late_dynamic_regions = [&] { return std::vector<std::pair<int, cv::Mat>>{{-1, left}}; };
+  EXPECT_THAT(
+      [&] {
+        RunSequence(*sequence_, setup_->camera.depth_factor, setup_->camera.Camera(), Orb(*setup_),
+                    setup_->options, options);
+      },
+      ::testing::ThrowsMessage<Error>(HasSubstr("negative frame")));
+}
+
 // Twenty black frames: the first max_coasting_frames (10) get the motion model's pose, marked
 // as coasting with a confidence that worsens frame by frame; the rest have no pose; the first
 // frame after the stretch relocalises. (The trajectory unsmoothed, so that the bridged poses are

@@ -149,8 +149,9 @@ TrackResult Tracker::Track(Frame frame) {
       // A keyframe anchors the points made from it: one made from a pose less certain than
       // the frames before it (a fast turn) places them with that pose's error, and every run
       // that made it there parted from the others (docs/slam.md, "Where runs part"). It waits
-      // for a surer frame.
-      if (!localize_ && NeedNewKeyFrame() && AsCertainAsRecentFrames()) {
+      // for a surer frame, unless the map has just lost points to a late dynamic region
+      // (ForgetMapPointsIn): then the first frame after it makes the keyframe that refills it.
+      if (!localize_ && NeedNewKeyFrame() && (renew_keyframe_ || AsCertainAsRecentFrames())) {
         CreateNewKeyFrame();
         result.new_keyframe = true;
       }
@@ -194,6 +195,30 @@ TrackResult Tracker::Track(Frame frame) {
   // Points are culled only while a keyframe is mapped.
   if (result.new_keyframe) ReclaimMapPoints();
   return result;
+}
+
+int Tracker::ForgetMapPointsIn(double timestamp, const cv::Mat& region) {
+  if (region.type() != CV_8UC1) throw Error("slam: a region to forget must be CV_8U");
+  if (localize_) return 0;
+  int forgotten = 0;
+  for (KeyFrame* keyframe : map_.KeyFrames()) {
+    if (keyframe->timestamp() != timestamp) continue;
+    const FrameFeatures& features = keyframe->features();
+    for (int i = 0; i < features.size(); ++i) {
+      MapPoint* point = keyframe->map_point(i);
+      const cv::Point at(cvRound(features.keypoint(i).pt.x), cvRound(features.keypoint(i).pt.y));
+      if (point == nullptr || point->bad() || !cv::Rect({}, region.size()).contains(at) ||
+          region.at<uchar>(at) == 0) {
+        continue;
+      }
+      point->SetBad();
+      ++forgotten;
+    }
+  }
+  // The map lost what the keyframe saw there: the next frame, whose regions are known, refills
+  // it from the scene behind (as a keyframe).
+  renew_keyframe_ = renew_keyframe_ || forgotten > 0;
+  return forgotten;
 }
 
 void Tracker::UseMap(Map map, bool localize) {
@@ -789,6 +814,7 @@ bool Tracker::NeedNewKeyFrame() const {
       keyframes > options_.max_frames_between_keyframes) {
     return false;
   }
+  if (renew_keyframe_ && inliers_ > 15) return true;
   const int min_observations = keyframes <= 2 ? 2 : 3;
   const int reference_matches = reference_->TrackedMapPoints(min_observations);
   int tracked_close = 0;
@@ -814,6 +840,7 @@ bool Tracker::NeedNewKeyFrame() const {
 void Tracker::CreateNewKeyFrame() {
   Frame& frame = *current_;
   KeyFrame* keyframe = map_.AddKeyFrame(frame);
+  renew_keyframe_ = false;
   // Points from depth: every close one, and at least the 100 nearest.
   std::vector<std::pair<double, int>> by_depth;
   for (int i = 0; i < frame.size(); ++i) {

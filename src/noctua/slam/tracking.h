@@ -109,6 +109,12 @@ class Tracker {
   // Throws noctua::Error after the first frame or for a map without keyframes.
   void UseMap(Map map, bool localize);
   bool localize() const { return localize_; }
+  // Culls the map points that the keyframe made of the frame stamped `timestamp` (if it became
+  // one) holds where `region` (CV_8U over the frame) is non-zero: for a dynamic region known
+  // only once the frame was tracked (in real time, a frame that came before the first detection
+  // finished); the next frame tracked then becomes a keyframe at once, to refill the map from the
+  // scene behind. Nothing changes while localising. Returns how many points were culled.
+  int ForgetMapPointsIn(double timestamp, const cv::Mat& region);
 
   const Map& map() const { return map_; }
   // The vocabulary in use (SlamOptions::vocabulary), nullptr for none, and the keyframe database
@@ -201,6 +207,7 @@ class Tracker {
 
   TrackingState state_ = TrackingState::kNotInitialised;
   bool localize_ = false;
+  bool renew_keyframe_ = false;  // ForgetMapPointsIn culled points: the next frame is a keyframe
   std::unique_ptr<Frame> current_;
   std::unique_ptr<Frame> last_;
   std::optional<geometry::Pose> velocity_;
