@@ -8,6 +8,7 @@
 #include <opencv2/core.hpp>
 #include <optional>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include "noctua/dynamic/dynamic_mask.h"
@@ -64,10 +65,21 @@ class AsyncMaskPipeline {
   // none), regions are cut to their objects' depth segments (DynamicMaskOptions::depth_segment).
   void Submit(const cv::Mat& image, const cv::Mat& depth_m = cv::Mat());
   // The mask of the oldest submitted frame whose mask has not been taken: waits for its
-  // detection (AsyncMaskOptions::wait_for_detection), or only for the first one. Rethrows what
-  // detection threw for that frame (without waiting: the last detection). Throws noctua::Error
-  // when no frame is outstanding.
+  // detection (AsyncMaskOptions::wait_for_detection), or else carries the newest finished one
+  // (no dynamic region, without waiting, before the first finishes). Rethrows what detection
+  // threw for that frame (without waiting: the last detection). Throws noctua::Error when no
+  // frame is outstanding.
   cv::Mat Next();
+  // Frames that went on without dynamic regions because no detection had finished yet (see
+  // Next), each once, with the regions it would have carried (CV_8U, non-zero inside), as soon
+  // as a detection has finished: so that a user can take back what such a frame put where the
+  // regions are (the map points of a SLAM's first keyframe on a person). Empty before that, and
+  // where the detection failed (Next rethrows that).
+  struct LateMask {
+    long index = 0;  // in submission order
+    cv::Mat mask;
+  };
+  std::vector<LateMask> TakeLateMasks();
   // Frames submitted whose masks have not been taken.
   int outstanding() const;
   // Frames the detector has run on so far.
@@ -105,6 +117,8 @@ class AsyncMaskPipeline {
     std::exception_ptr error;
   };
   std::optional<FinishedDetection> newest_;
+  // Frames taken before the first detection finished, for TakeLateMasks.
+  std::vector<std::pair<long, Submitted>> unmasked_;
   Submitted newest_submitted_;
   long next_due_ = 0;  // the first frame index the detector may take next
   long detections_ = 0;

@@ -266,6 +266,13 @@ SlamRunReport SlamRunner::Run(const SlamProgress& progress, const std::function<
     run_options.lookahead = [masks](const cv::Mat& image, const cv::Mat& depth_m) {
       masks->Submit(image, depth_m);
     };
+    run_options.late_dynamic_regions = [masks] {
+      std::vector<std::pair<int, cv::Mat>> regions;
+      for (auto& late : masks->TakeLateMasks()) {
+        regions.emplace_back(static_cast<int>(late.index), std::move(late.mask));
+      }
+      return regions;
+    };
   }
   // Resident memory after every frame (reading /proc/self/statm costs microseconds).
   run_options.progress = [&](int index, int count, const slam::FrameOutcome& outcome) {
