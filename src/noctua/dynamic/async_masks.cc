@@ -96,6 +96,11 @@ cv::Mat AsyncMaskPipeline::CarryNewest() {
   if (detection.size != frame.image.size()) {
     throw Error("asynchronous dynamic masks: frames of different sizes in one sequence");
   }
+  return Carried(detection, index, frame);
+}
+
+cv::Mat AsyncMaskPipeline::Carried(const FinishedDetection& detection, long index,
+                                   const Submitted& frame) const {
   const int age = static_cast<int>(std::abs(index - detection.index));
   return DynamicObjectsMask(detection.objects, mask_options_, detection.size, frame.depth_m,
                             age * async_options_.carried_growth_px);
@@ -110,10 +115,7 @@ std::vector<AsyncMaskPipeline::LateMask> AsyncMaskPipeline::TakeLateMasks() {
   std::vector<LateMask> late;
   for (const auto& [index, frame] : unmasked) {
     if (frame.image.size() != detection.size) continue;  // Next reports the mismatch
-    const int age = static_cast<int>(std::abs(index - detection.index));
-    late.push_back(
-        {index, DynamicObjectsMask(detection.objects, mask_options_, detection.size, frame.depth_m,
-                                   age * async_options_.carried_growth_px)});
+    late.push_back({index, Carried(detection, index, frame)});
   }
   return late;
 }

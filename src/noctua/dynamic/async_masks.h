@@ -116,6 +116,8 @@ class AsyncMaskPipeline {
     cv::Size size;
     std::exception_ptr error;
   };
+  // The regions of `detection` carried to the frame of `index`, grown by its age in frames.
+  cv::Mat Carried(const FinishedDetection& detection, long index, const Submitted& frame) const;
   std::optional<FinishedDetection> newest_;
   // Frames taken before the first detection finished, for TakeLateMasks.
   std::vector<std::pair<long, Submitted>> unmasked_;
