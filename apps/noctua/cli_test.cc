@@ -295,6 +295,11 @@ TEST_F(CliTest, SimulateListsTheSensorModelsAndRefusesAnUnknownOne) {
                 "/config/tum_fr1.yaml --level 15 --sensor potato --out " + (dir_ / "p").string());
   EXPECT_EQ(unknown.exit_code, 1);
   EXPECT_THAT(unknown.output, HasSubstr("unknown sensor model 'potato'"));
+  const CommandResult too_short = RunNoctua(
+      "simulate --dataset " + fr1 + " --camera " + NOCTUA_SOURCE_DIR +
+      "/config/tum_fr1.yaml --level 15 --max-exposure-ms 2 --out " + (dir_ / "s").string());
+  EXPECT_EQ(too_short.exit_code, 1);
+  EXPECT_THAT(too_short.output, HasSubstr("max_exposure_s must be at least exposure_s"));
   const CommandResult no_dataset = RunNoctua("simulate --level 15 --out " + (dir_ / "q").string());
   EXPECT_EQ(no_dataset.exit_code, 1);
   EXPECT_THAT(no_dataset.output, HasSubstr("simulate needs --dataset"));

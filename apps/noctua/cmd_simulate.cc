@@ -33,8 +33,9 @@ struct SimulateFlags {
   std::uint64_t seed = 1;
   int max_frames = 0;
   std::string sensor = sim::kDefaultSensorModel;
-  double full_well = 0.0;    // 0: the model's
-  double read_noise = -1.0;  // negative: the model's
+  double full_well = 0.0;        // 0: the model's
+  double read_noise = -1.0;      // negative: the model's
+  double max_exposure_ms = 0.0;  // 0: the model's
   bool no_blur = false;
   bool list_sensors = false;
   bool force = false;
@@ -85,7 +86,8 @@ void RunSimulate(const SimulateFlags& flags) {
     throw Error("--person-mask and --seg-model only apply with --person-cutout");
   }
   options.person_options.distance_m = flags.person_distance_m;
-  options.sensor = sim::SensorModelWithOverrides(flags.sensor, flags.full_well, flags.read_noise);
+  options.sensor = sim::SensorModelWithOverrides(flags.sensor, flags.full_well, flags.read_noise,
+                                                 flags.max_exposure_ms / 1000.0);
   options.motion_blur = !flags.no_blur;
   options.seed = flags.seed;
   options.max_frames = flags.max_frames;
@@ -145,6 +147,9 @@ void AddSimulateCommand(CLI::App& app) {
   command->add_option("--full-well", flags->full_well, "Override the model's full well, electrons");
   command->add_option("--read-noise", flags->read_noise,
                       "Override the model's read noise, electrons rms");
+  command->add_option("--max-exposure-ms", flags->max_exposure_ms,
+                      "Override the model's longest exposure, ms (a dark frame's: a shorter one "
+                      "blurs less and leaves the frame darker)");
   command->add_option("--seed", flags->seed, "Noise seed")->capture_default_str();
   command->add_option("--max-frames", flags->max_frames, "Only the first N frames (0: all)")
       ->capture_default_str();

@@ -131,11 +131,14 @@ std::string SensorModelTable() {
 }
 
 SensorModel SensorModelWithOverrides(const std::string& name, double full_well_electrons,
-                                     double read_noise_electrons) {
+                                     double read_noise_electrons, double max_exposure_s) {
   SensorModel model = SensorModelByName(name);
   if (full_well_electrons > 0.0) model.full_well_electrons = full_well_electrons;
   if (read_noise_electrons >= 0.0) model.read_noise_electrons = read_noise_electrons;
-  if (full_well_electrons > 0.0 || read_noise_electrons >= 0.0) model.name += "+overrides";
+  if (max_exposure_s > 0.0) model.max_exposure_s = max_exposure_s;
+  if (full_well_electrons > 0.0 || read_noise_electrons >= 0.0 || max_exposure_s > 0.0) {
+    model.name += "+overrides";
+  }
   model.Check();
   return model;
 }

@@ -61,10 +61,12 @@ const SensorModel& SensorModelByName(const std::string& name);
 // "webcam, kinect, ..." for help texts and errors.
 std::string SensorModelNames();
 
-// The named model with a user's overrides: full well (electrons; <= 0 keeps the model's) and read
-// noise (electrons rms; < 0 keeps the model's). The name says when anything was overridden.
+// The named model with a user's overrides: full well (electrons; <= 0 keeps the model's), read
+// noise (electrons rms; < 0 keeps the model's) and longest exposure (seconds, at least the
+// normal-light one; <= 0 keeps the model's: a camera told to expose for less in the dark takes a
+// darker, sharper frame). The name says when anything was overridden.
 SensorModel SensorModelWithOverrides(const std::string& name, double full_well_electrons,
-                                     double read_noise_electrons);
+                                     double read_noise_electrons, double max_exposure_s = 0.0);
 
 // The model `noctua simulate` and the demo use unless told otherwise.
 inline constexpr const char* kDefaultSensorModel = "kinect";

@@ -230,7 +230,25 @@ TEST(SensorModels, OverridesReplaceOnlyWhatIsGivenAndSaySo) {
   EXPECT_EQ(changed.full_well_electrons, 2500.0);
   EXPECT_EQ(changed.read_noise_electrons, 7.0);
   EXPECT_EQ(changed.gamma, kinect.gamma);
+  EXPECT_EQ(changed.max_exposure_s, kinect.max_exposure_s);
   EXPECT_THROW(SensorModelWithOverrides("no-such-sensor", 0.0, -1.0), Error);
+}
+
+TEST(SensorModels, AShorterLongestExposureBlursLessInTheDark) {
+  const SensorModel& kinect = SensorModelByName("kinect");
+  const SensorModel capped = SensorModelWithOverrides("kinect", 0.0, -1.0, 0.015);
+  EXPECT_EQ(capped.name, "kinect+overrides");
+  EXPECT_EQ(capped.ExposureForLevel(0.15), 0.015);
+  EXPECT_NEAR(capped.ExtraExposureForLevel(0.15), 0.015 - kinect.exposure_s, 1e-12);
+  EXPECT_LT(capped.ExtraExposureForLevel(0.15), kinect.ExtraExposureForLevel(0.15));
+  EXPECT_EQ(capped.ExposureForLevel(1.0), kinect.exposure_s);
+  // Shorter than the normal-light exposure is no camera: refused, naming the field.
+  try {
+    SensorModelWithOverrides("kinect", 0.0, -1.0, 0.5 * kinect.exposure_s);
+    FAIL() << "expected an error";
+  } catch (const Error& error) {
+    EXPECT_NE(std::string(error.what()).find("max_exposure_s"), std::string::npos);
+  }
 }
 
 }  // namespace
