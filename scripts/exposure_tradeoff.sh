@@ -7,13 +7,13 @@
 # exposed for t instead of T collects t / T of the electrons, so its mean grey is LEVEL x
 # (t / T)^(1 / gamma) by the model's response curve. Each case is `noctua simulate
 # --max-exposure-ms` of tum_fr1_rpy_200, seeds 1..N, run through `noctua slam --deterministic`.
-# Writes OUT/runs.csv, OUT/tradeoff.md (ATE mean (min-max), its ratio to the method at normal
-# light and frames without a pose, per model and exposure) and OUT/tradeoff.png (mean ATE against
-# exposure, one line per model, and 1.2 x normal light).
+# Writes OUT/runs_METHOD.csv, OUT/tradeoff_METHOD.md (ATE mean (min-max), its ratio to the
+# method at normal light and frames without a pose, per model and exposure) and
+# OUT/tradeoff_METHOD.png (mean ATE against exposure, one line per model, and 1.2 x normal light).
 # Usage: scripts/exposure_tradeoff.sh [OUT (default exposure-tradeoff)]
 # NOCTUA_SENSORS (default every camera model), NOCTUA_FRACTIONS (default "1 0.5 0.3"),
 # NOCTUA_LEVEL (15), NOCTUA_SEEDS ("1 2 3"), NOCTUA_FRAMES (100), NOCTUA_METHOD (noctua),
-# NOCTUA_JOBS (2).
+# NOCTUA_JOBS (2). Runs of another method into the same OUT reuse its simulated sequences.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 out=${1:-exposure-tradeoff}
@@ -56,7 +56,7 @@ done
 
 run_one() {
   local sensor=$1 exposure=$2 case_level=$3 seed=$4 name=${1}_${2}ms_s$4
-  local seq=$out/seq/$name run=$out/slam/$name
+  local seq=$out/seq/$name run=$out/slam/${name}_$method
   if [ ! -e "$seq/simulation.json" ]; then
     echo "exposure_tradeoff: simulate $sensor ${exposure} ms (${case_level} %) seed $seed" >&2
     "$noctua" simulate --dataset "$dataset" --camera "$config" --sensor "$sensor" \
@@ -72,7 +72,7 @@ run_one() {
 # The reference: the same method on the recorded frames (normal light), scaled by 1, 0.98 and
 # 0.96 as in scripts/lowlight_sweep.sh, since a SLAM run on the same frames repeats itself.
 normal_one() {
-  local run=$out/slam/normal_$1
+  local run=$out/slam/normal_${1}_$method
   [ -e "$run/report.json" ] && return 0
   "$noctua" slam --dataset "$dataset" --brightness "$1" --config "$config" --method "$method" \
     --max-frames "$frames" --out "$run" --force --progress-every 100000 --deterministic \
@@ -82,15 +82,15 @@ export -f run_one normal_one
 export out dataset config noctua frames method
 xargs -P "$jobs" -L 1 bash -c 'run_one "$@"' _ <"$cases"
 printf '%s\n' 1 0.98 0.96 | xargs -P "$jobs" -L 1 bash -c 'normal_one "$@"' _
-normal=$(for scale in 1 0.98 0.96; do jq '.ate.translation_m.rmse' "$out/slam/normal_$scale/report.json"; done |
+normal=$(for scale in 1 0.98 0.96; do jq '.ate.translation_m.rmse' "$out/slam/normal_${scale}_$method/report.json"; done |
   awk '{ s += $1 } END { printf "%.5f", s / NR }')
 
-csv=$out/runs.csv
+csv=$out/runs_$method.csv
 echo "sensor,exposure_ms,level,seed,method,ate_rmse_m,lost_frames" >"$csv"
 while read -r sensor exposure case_level seed; do
   jq -r --arg s "$sensor" --arg e "$exposure" --arg l "$case_level" --arg k "$seed" \
     --arg m "$method" '[$s, $e, $l, $k, $m, (.ate.translation_m.rmse // "nan"), .lost_frames] |
-      @csv' "$out/slam/${sensor}_${exposure}ms_s$seed/report.json" | tr -d '"' >>"$csv"
+      @csv' "$out/slam/${sensor}_${exposure}ms_s${seed}_$method/report.json" | tr -d '"' >>"$csv"
 done <"$cases"
 
 {
@@ -98,39 +98,47 @@ done <"$cases"
   echo
   echo "| model | longest exposure ms | mean grey | $method ATE RMSE m, mean (min–max) | mean / normal light | frames without a pose (per run) |"
   echo "|---|---:|---:|---|---:|---|"
+  # A run that never started its map has no ATE: the mean is over the runs that have one.
   awk -F, -v normal="$normal" 'NR > 1 {
       key = $1 "|" $2 "|" $3; if (!(key in n)) order[++k] = key
-      n[key]++; sum[key] += $6
+      n[key]++; lost[key] = lost[key] (lost[key] == "" ? "" : "/") $7
+      if ($6 == "nan") next
+      valid[key]++; sum[key] += $6
       if (!(key in lo) || $6 < lo[key]) lo[key] = $6
       if (!(key in hi) || $6 > hi[key]) hi[key] = $6
-      lost[key] = lost[key] (lost[key] == "" ? "" : "/") $7
     }
     END {
       for (i = 1; i <= k; i++) {
         split(order[i], part, "|"); key = order[i]
-        printf "| %s | %s | %s %% | %.4f (%.4f–%.4f) | %.2f | %s |\n", part[1], part[2], part[3],
-               sum[key] / n[key], lo[key], hi[key], sum[key] / n[key] / normal, lost[key]
+        if (valid[key] == 0) { ate = "no run has a pose"; ratio = "–" }
+        else {
+          ate = sprintf("%.4f (%.4f–%.4f)", sum[key] / valid[key], lo[key], hi[key])
+          if (valid[key] < n[key]) ate = ate sprintf(", %d of %d runs", valid[key], n[key])
+          ratio = sprintf("%.2f", sum[key] / valid[key] / normal)
+        }
+        printf "| %s | %s | %s %% | %s | %s | %s |\n", part[1], part[2], part[3], ate, ratio,
+               lost[key]
       }
     }' "$csv"
-} >"$out/tradeoff.md"
+} >"$out/tradeoff_$method.md"
 
 if command -v gnuplot >/dev/null; then
   for sensor in $sensors; do
-    awk -F, -v s="$sensor" 'NR > 1 && $1 == s { sum[$2] += $6; n[$2]++ }
+    awk -F, -v s="$sensor" 'NR > 1 && $1 == s && $6 != "nan" { sum[$2] += $6; n[$2]++ }
       END { for (e in sum) printf "%s %.5f\n", e, sum[e] / n[e] }' "$csv" | sort -n \
-      >"$out/tradeoff_$sensor.dat"
+      >"$out/tradeoff_${method}_$sensor.dat"
   done
   {
     echo "set terminal pngcairo size 640,420 noenhanced"
-    echo "set output '$out/tradeoff.png'"
+    echo "set output '$out/tradeoff_$method.png'"
     echo "set title 'tum_fr1_rpy_200, $level % at each model''s longest exposure: $method'"
     echo "set xlabel 'longest exposure (ms)'; set ylabel 'ATE RMSE (m), mean over seeds'; set grid"
     plot="plot $normal * 1.2 with lines dashtype 2 title '1.2 x normal light',"
     for sensor in $sensors; do
-      plot+=" '$out/tradeoff_$sensor.dat' using 1:2 with linespoints title '$sensor',"
+      plot+=" '$out/tradeoff_${method}_$sensor.dat' using 1:2 with linespoints title '$sensor',"
     done
     echo "${plot%,}"
   } | gnuplot
 fi
-cat "$out/tradeoff.md"
-echo "exposure_tradeoff: wrote $out/tradeoff.md, $out/runs.csv and $out/tradeoff.png" >&2
+cat "$out/tradeoff_$method.md"
+echo "exposure_tradeoff: wrote $out/tradeoff_$method.md, $csv and $out/tradeoff_$method.png" >&2
