@@ -4,8 +4,9 @@
 # For each sensor model, the scene is lit so that the model's own longest exposure gives LEVEL %
 # mean grey (as in scripts/lowlight_sweep.sh); the same scene is then taken with the longest
 # exposure cut to each FRACTION of it (never below the model's normal-light exposure). A frame
-# exposed for t instead of T collects t / T of the electrons, so its mean grey is LEVEL x
-# (t / T)^(1 / gamma) by the model's response curve. Each case is `noctua simulate
+# exposed for t instead of T collects t / T of the electrons, so its mean grey is about LEVEL x
+# (t / T)^(1 / gamma) by the model's response curve (noise and clipping at black left out: the
+# level asked of `simulate`, which measures what it makes). Each case is `noctua simulate
 # --max-exposure-ms` of tum_fr1_rpy_200, seeds 1..N, run through `noctua slam --deterministic`.
 # Writes OUT/runs_METHOD.csv, OUT/tradeoff_METHOD.md (ATE mean (min-max), its ratio to the
 # method at normal light and frames without a pose, per model and exposure) and
