@@ -387,8 +387,9 @@ TEST_F(CliTest, BenchWritesATableJsonAndPlotWithEveryStageAndMethod) {
     ExpectPositiveRow(row);
     EXPECT_GT(row["frames_per_s"].get<double>(), 0.0);
   }
-  EXPECT_THAT(methods, ::testing::IsSupersetOf({"fast", "orb-opencv", "orb", "he-orb", "clahe-orb",
-                                                "paper", "sift", "surf", "slam (paper)"}));
+  EXPECT_THAT(methods,
+              ::testing::IsSupersetOf({"fast", "orb-opencv", "orb", "he-orb", "clahe-orb", "paper",
+                                       "noctua", "sift", "surf", "slam (paper)"}));
   std::vector<std::string> stages;
   for (const auto& row : report["stages"]) {
     stages.push_back(row["name"]);
@@ -400,7 +401,10 @@ TEST_F(CliTest, BenchWritesATableJsonAndPlotWithEveryStageAndMethod) {
                    "oFAST (grid FAST, all levels)", "orientation (intensity centroid)",
                    "phase congruency edge map", "filter (b): on an edge", "filter (c): 3x3 NMS",
                    "rBRIEF descriptors", "matching (2-NN + ratio 0.8, consecutive frames)",
-                   "slam: track local map (incl. pose optimisation)"}));
+                   "slam: track local map (incl. pose optimisation)",
+                   // noctua's own stages: its frame conditioning changes what FAST and rBRIEF see
+                   "noctua: noise conditioning (gain, noise estimate, smoothing)",
+                   "noctua: oFAST (grid FAST, all levels)", "noctua: rBRIEF descriptors"}));
   // The Markdown table has one row per JSON row, and the plot is a real PNG.
   std::ifstream markdown_in(out / "bench.md");
   const std::string markdown((std::istreambuf_iterator<char>(markdown_in)),

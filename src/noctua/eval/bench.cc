@@ -49,6 +49,7 @@ class Reference {
 const std::vector<std::pair<std::string, std::string>>& ExtractorStages() {
   static const std::vector<std::pair<std::string, std::string>> stages = {
       {"grey", "grey conversion"},
+      {"condition", "noise conditioning (gain, noise estimate, smoothing)"},
       {"enhance", "CLAHE"},
       {"pyramid", "pyramid (8 levels)"},
       {"fast", "oFAST (grid FAST, all levels)"},
@@ -106,15 +107,19 @@ struct BenchContext {
 };
 
 // The paper method's stage timers into the stage rows; the detector stages exist only in
-// paper+detector, the rest come from paper.
+// paper+detector, the rest come from paper. noctua's stages get rows of their own (prefixed with
+// its name): its conditioning changes what FAST and rBRIEF are given, so its stage times differ
+// from the paper's on the same frame.
 void AddExtractorStages(const std::string& method, const features::ExtractionStats& stats, int rep,
                         BenchTable& table) {
+  const std::string prefix = method == "noctua" ? "noctua: " : "";
   for (const auto& [key, label] : ExtractorStages()) {
     const auto found = stats.stage_ms.find(key);
     if (found == stats.stage_ms.end()) continue;
     const bool detector_stage = key == "dynamic-mask" || key == "dynamic-filter";
     if (detector_stage != (method == "paper+detector")) continue;
-    table.Get("stage", label, "ExtractionStats of " + method).ms.Add(rep, found->second);
+    if (method == "noctua" && key == "enhance") continue;  // noctua enhances nothing
+    table.Get("stage", prefix + label, "ExtractionStats of " + method).ms.Add(rep, found->second);
   }
 }
 
@@ -133,7 +138,7 @@ void TimeMethods(BenchContext& context, int rep) {
       BenchRow& row = result.table.Get("method", named.name, "end to end, colour frame in");
       row.ms.Add(rep, watch.ElapsedMs());
       row.keypoints.push_back(static_cast<double>(extraction.keypoints.size()));
-      if (named.name == "paper" || named.name == "paper+detector") {
+      if (named.name == "paper" || named.name == "paper+detector" || named.name == "noctua") {
         AddExtractorStages(named.name, extraction.stats, rep, result.table);
       }
       if (named.name != "paper") continue;

@@ -16,6 +16,11 @@ namespace {
 // of the magnitude of a zero-mean Gaussian is 0.6745 of its deviation.
 constexpr double kMaskNorm = 6.0;
 constexpr double kMedianOfMagnitude = 0.6745;
+// The median of n magnitudes has a relative standard error of about 1.2 / sqrt(n) for Gaussian
+// noise: 2^16 samples put it within 0.5 %, far below what any threshold built on it can resolve.
+// A larger frame is sampled on evenly spaced rows, which costs the estimate nothing and the
+// frame's extraction a quarter of the passes at 640x480.
+constexpr int kEnoughSamples = 1 << 16;
 
 }  // namespace
 
@@ -34,8 +39,10 @@ double EstimateNoiseSigmaAtSpacing(const cv::Mat& gray8u, int spacing) {
   // the median in the same pass.
   std::array<int, 16 * 255 + 1> histogram{};
   std::vector<int> vertical(static_cast<std::size_t>(gray8u.cols));
+  const int usable = (gray8u.rows - 2 * spacing) * (gray8u.cols - 2 * spacing);
+  const int row_step = std::max(1, usable / kEnoughSamples);
   int count = 0;
-  for (int r = spacing; r + spacing < gray8u.rows; ++r) {
+  for (int r = spacing; r + spacing < gray8u.rows; r += row_step) {
     const auto* above = gray8u.ptr<std::uint8_t>(r - spacing);
     const auto* grey = gray8u.ptr<std::uint8_t>(r);
     const auto* below_row = gray8u.ptr<std::uint8_t>(r + spacing);
