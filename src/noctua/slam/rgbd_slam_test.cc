@@ -554,6 +554,57 @@ class RecordingFeature2D : public cv::Feature2D {
   std::vector<std::string>* events_;
 };
 
+// Extracts as `inner` does, and in the frame of call `decoy_call` adds to every keypoint a decoy
+// at the point mirrored through the image's centre with the same descriptor: each descriptor then
+// has two equally near neighbours, so matching by descriptor alone (Lowe's ratio) finds nothing,
+// while a search near each point's predicted position finds the real one.
+class DecoyFeature2D : public cv::Feature2D {
+ public:
+  DecoyFeature2D(cv::Ptr<cv::Feature2D> inner, int decoy_call)
+      : inner_(std::move(inner)), decoy_call_(decoy_call) {}
+  void detectAndCompute(cv::InputArray image, cv::InputArray mask,
+                        std::vector<cv::KeyPoint>& keypoints, cv::OutputArray descriptors,
+                        bool use_provided_keypoints) override {
+    cv::Mat described;
+    inner_->detectAndCompute(image, mask, keypoints, described, use_provided_keypoints);
+    if (calls_++ == decoy_call_) {
+      const std::size_t real = keypoints.size();
+      for (std::size_t i = 0; i < real; ++i) {
+        cv::KeyPoint decoy = keypoints[i];
+        decoy.pt = cv::Point2f(static_cast<float>(image.cols() - 1) - decoy.pt.x,
+                               static_cast<float>(image.rows() - 1) - decoy.pt.y);
+        keypoints.push_back(decoy);
+      }
+      cv::vconcat(described, described.clone(), described);
+    }
+    described.copyTo(descriptors);
+  }
+
+ private:
+  cv::Ptr<cv::Feature2D> inner_;
+  int decoy_call_;
+  int calls_ = 0;
+};
+
+// The first frame after the map's start has no velocity to predict it from, and in the dark its
+// descriptors alone may match too few of the map's points. Frame 1 here matches none by
+// descriptor (each has a decoy as near); it is tracked as a still camera, by projection, and so
+// is every frame after it.
+TEST_F(RgbdSlamTest, TracksTheFirstFrameAsStillWhenDescriptorsAloneMatchTooFew) {
+  RunOptions options;
+  options.max_frames = 30;
+  const SequenceRun run =
+      RunSequence(*sequence_, setup_->camera.depth_factor, setup_->camera.Camera(),
+                  cv::makePtr<DecoyFeature2D>(Orb(*setup_), 1), setup_->options, options);
+  ASSERT_EQ(run.frames.size(), 30u);
+  EXPECT_EQ(run.frames[1].state, TrackingState::kOk);
+  EXPECT_EQ(run.frames[1].method, "still");
+  EXPECT_GT(run.frames[1].keypoints, 3 * run.frames[0].keypoints / 2);  // the decoys are in
+  EXPECT_TRUE(run.lost_frames.empty());
+  EXPECT_EQ(run.frames[2].method, "motion");
+  EXPECT_LT(Ate(run.trajectory), 0.03);
+}
+
 // Every frame reaches the lookahead once, in order, after transform_image and `lookahead_frames`
 // frames before its extraction, with and without extraction overlapped with tracking; the
 // trajectory is the one of a run without a lookahead.

@@ -14,6 +14,13 @@
 namespace noctua::slam {
 namespace {
 
+// Projection search windows at level 0, in pixels. The constant-velocity prediction is off by
+// what the motion changed in a frame (ORB-SLAM's 15 px). A camera taken as still is off by its
+// whole motion in a frame: a turn of 1 rad/s, fast for a hand-held camera, moves the image by
+// about 17 px at 30 Hz with fr1's focal length.
+constexpr double kMotionModelRadiusPx = 15.0;
+constexpr double kStillRadiusPx = 30.0;
+
 // Ids of temporary points, which live for one frame: the last frame's depth points (visual
 // odometry), and, localising, the reference keyframe's depth points, which count as the map's.
 constexpr long kOdometryPointId = -1;
@@ -94,12 +101,20 @@ TrackResult Tracker::Track(Frame frame) {
   } else {
     if (state_ == TrackingState::kOk) {
       if (velocity_.has_value() && current_->id >= last_relocalisation_frame_id_ + 2) {
-        ok = TrackWithMotionModel();
+        ok = TrackWithMotionModel(*velocity_, kMotionModelRadiusPx);
         result.method = "motion";
       }
       if (!ok) {
         ok = TrackReferenceKeyFrame();
         result.method = "reference";
+      }
+      // With no velocity yet (the first frame after the map's start or after a relocalisation),
+      // tracking rests on matching descriptors alone, and a dark, noisy frame can leave too few
+      // of them. The frame right after the last one moved less than the still window: taken as
+      // still, it is searched by position, which holds where descriptors alone do not.
+      if (!ok && !velocity_.has_value() && last_->id + 1 == current_->id) {
+        ok = TrackWithMotionModel(geometry::Pose::Identity(), kStillRadiusPx);
+        result.method = "still";
       }
     } else {
       ok = Relocalise();
@@ -376,15 +391,15 @@ std::optional<CentrePrior> Tracker::MotionPrior() const {
                      options_.motion_prior_outlier_sigmas};
 }
 
-bool Tracker::TrackWithMotionModel() {
+bool Tracker::TrackWithMotionModel(const geometry::Pose& motion, double radius) {
   UpdateLastFrame();
   Frame& frame = *current_;
-  frame.pose_cw = *velocity_ * last_->pose_cw;
+  frame.pose_cw = motion * last_->pose_cw;
   std::fill(frame.map_points.begin(), frame.map_points.end(), nullptr);
-  int matches = matcher_.SearchByProjection(frame, *last_, 15.0);
+  int matches = matcher_.SearchByProjection(frame, *last_, radius);
   if (matches < 20) {
     std::fill(frame.map_points.begin(), frame.map_points.end(), nullptr);
-    matches = matcher_.SearchByProjection(frame, *last_, 30.0);
+    matches = matcher_.SearchByProjection(frame, *last_, 2.0 * radius);
   }
   if (matches < 20) return false;
   RejectMovingMatches(false);

@@ -36,7 +36,8 @@ const char* TrackingStateName(TrackingState state);
 // How one frame went.
 struct TrackResult {
   TrackingState state = TrackingState::kNotInitialised;
-  std::string method;  // "init", "motion", "reference", "relocalisation", "" when lost
+  // How it was tracked: "init", "motion", "reference", "still", "relocalisation"; "" when lost.
+  std::string method;
   int keypoints = 0;
   int inliers = 0;
   // Keypoints kept out of tracking and mapping as moving (SlamOptions::reject_moving_points):
@@ -131,7 +132,9 @@ class Tracker {
 
  private:
   bool Initialise(Frame& frame);
-  bool TrackWithMotionModel();
+  // Predicts the frame's pose as `motion` after the last frame's and matches by projection
+  // within `radius` pixels (scaled by the level), twice that when too few are found.
+  bool TrackWithMotionModel(const geometry::Pose& motion, double radius);
   bool TrackReferenceKeyFrame();
   bool Relocalise();
   // Relocalisation candidates: keyframes with their descriptor matches to the current frame (at
