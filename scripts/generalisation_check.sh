@@ -12,7 +12,8 @@
 # The candidate is extra `noctua slam` flags, CANDIDATE_ARGS (e.g. "--no-loop-closing"), and/or
 # settings files of its own, CANDIDATE_FR1_CONFIG and CANDIDATE_BONN_CONFIG (default
 # config/tum_fr1.yaml and config/bonn.yaml, which the baseline uses; BASELINE_ARGS adds flags to
-# the baseline). Writes OUT/runs.csv (one line per run) and OUT/check.md (per method and set: mean ATE
+# the baseline), and/or a build of its own, CANDIDATE_BIN (a change of code: the baseline is
+# NOCTUA_BIN, default build/noctua). Writes OUT/runs.csv (one line per run) and OUT/check.md (per method and set: mean ATE
 # RMSE (min–max), worst / best, frames lost, and the candidate's mean against the baseline's).
 # Runs already in OUT are kept (an OUT made with other settings is refused). About 6 min for
 # three methods on 2 cores.
@@ -32,12 +33,13 @@ fr1_config=$root/config/tum_fr1.yaml
 bonn_config=$root/config/bonn.yaml
 CANDIDATE_FR1_CONFIG=${CANDIDATE_FR1_CONFIG:-$fr1_config}
 CANDIDATE_BONN_CONFIG=${CANDIDATE_BONN_CONFIG:-$bonn_config}
+CANDIDATE_BIN=${CANDIDATE_BIN:-$noctua}
 [ -n "${CANDIDATE_ARGS:-}" ] || [ "$CANDIDATE_FR1_CONFIG" != "$fr1_config" ] ||
-  [ "$CANDIDATE_BONN_CONFIG" != "$bonn_config" ] || {
-  echo "generalisation_check: set CANDIDATE_ARGS or CANDIDATE_*_CONFIG to the setting to check" >&2
+  [ "$CANDIDATE_BONN_CONFIG" != "$bonn_config" ] || [ "$CANDIDATE_BIN" != "$noctua" ] || {
+  echo "generalisation_check: set CANDIDATE_ARGS, CANDIDATE_*_CONFIG or CANDIDATE_BIN to check" >&2
   exit 1
 }
-for file in "$noctua" "$fr1/associations.txt" "$crowd/rgb.txt" "$detector" \
+for file in "$noctua" "$CANDIDATE_BIN" "$fr1/associations.txt" "$crowd/rgb.txt" "$detector" \
   "$CANDIDATE_FR1_CONFIG" "$CANDIDATE_BONN_CONFIG"; do
   [ -e "$file" ] ||
     { echo "generalisation_check: $file: not found (run scripts/setup.sh first)" >&2; exit 1; }
@@ -45,8 +47,9 @@ done
 command -v jq >/dev/null || { echo "generalisation_check: needs jq (apt-get install jq)" >&2; exit 1; }
 mkdir -p "$out/runs"
 # Runs already in OUT are kept, so they must have been made with these settings.
-settings=$(printf 'baseline: %s %s %s\ncandidate: %s %s %s' "${BASELINE_ARGS:-}" "$fr1_config" \
-  "$bonn_config" "${CANDIDATE_ARGS:-}" "$CANDIDATE_FR1_CONFIG" "$CANDIDATE_BONN_CONFIG")
+settings=$(printf 'baseline: %s %s %s %s\ncandidate: %s %s %s %s' "$noctua" "${BASELINE_ARGS:-}" \
+  "$fr1_config" "$bonn_config" "$CANDIDATE_BIN" "${CANDIDATE_ARGS:-}" "$CANDIDATE_FR1_CONFIG" \
+  "$CANDIDATE_BONN_CONFIG")
 if [ -e "$out/settings.txt" ] && [ "$(cat "$out/settings.txt")" != "$settings" ]; then
   echo "generalisation_check: $out/settings.txt: OUT holds runs of other settings; use another OUT" >&2
   exit 1
@@ -71,15 +74,16 @@ for setting in baseline candidate; do
 done
 echo "generalisation_check: $(wc -l <"$runs") SLAM runs, $jobs at a time" >&2
 export noctua out fr1 crowd detector fr1_config bonn_config BASELINE_ARGS CANDIDATE_ARGS \
-  CANDIDATE_FR1_CONFIG CANDIDATE_BONN_CONFIG
+  CANDIDATE_FR1_CONFIG CANDIDATE_BONN_CONFIG CANDIDATE_BIN
 # shellcheck disable=SC2016
 xargs -P "$jobs" -L 1 bash -c '
   setting=$0 method=$1 set=$2 b=$3
   run=$out/runs/${setting}_${method}_${set}_b$b
   [ -e "$run/report.json" ] && exit 0
-  extra=${BASELINE_ARGS:-} fr1_settings=$fr1_config bonn_settings=$bonn_config
+  extra=${BASELINE_ARGS:-} fr1_settings=$fr1_config bonn_settings=$bonn_config bin=$noctua
   if [ "$setting" = candidate ]; then
     extra=${CANDIDATE_ARGS:-} fr1_settings=$CANDIDATE_FR1_CONFIG bonn_settings=$CANDIDATE_BONN_CONFIG
+    bin=$CANDIDATE_BIN
   fi
   case $set in
     fr1*) args=(--dataset "$fr1" --config "$fr1_settings") ;;
@@ -87,7 +91,7 @@ xargs -P "$jobs" -L 1 bash -c '
     crowd-free) args=(--dataset "$crowd" --config "$bonn_settings" --reject-moving-points) ;;
   esac
   # shellcheck disable=SC2086
-  "$noctua" slam "${args[@]}" --method "$method" --brightness "$b" $extra --out "$run" --force \
+  "$bin" slam "${args[@]}" --method "$method" --brightness "$b" $extra --out "$run" --force \
     --progress-every 1000 --deterministic >/dev/null 2>"$run.log" ||
     { echo "generalisation_check: $run failed, see $run.log" >&2; exit 255; }
   echo "generalisation_check: done $setting, $method, $set, $b" >&2' <"$runs"

@@ -140,6 +140,14 @@ KeyFrame::KeyFrame(long id, const Frame& frame)
       pose_cw_(frame.pose_cw),
       map_points_(frame.map_points) {}
 
+void KeyFrame::ReplaceFeatures(std::shared_ptr<const FrameFeatures> features) {
+  if (features_ == nullptr) ThrowReleasedFeatures();
+  if (features == nullptr || features->size() != features_->size()) {
+    throw Error("slam: a keyframe's features can only be replaced by as many keypoints");
+  }
+  features_ = std::move(features);
+}
+
 int KeyFrame::IndexOf(const MapPoint* point) const {
   const auto found = point->observations().find(const_cast<KeyFrame*>(this));
   return found == point->observations().end() ? -1 : found->second;

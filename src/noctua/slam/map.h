@@ -125,6 +125,9 @@ class KeyFrame {
     if (features_ == nullptr) ThrowReleasedFeatures();
     return *features_;
   }
+  // The same keypoints in the same order, seen again (a rolling-shutter correction learnt after
+  // the keyframe was made); throws noctua::Error for another count or a culled keyframe.
+  void ReplaceFeatures(std::shared_ptr<const FrameFeatures> features);
   const geometry::Pose& pose_cw() const { return pose_cw_; }
   void set_pose_cw(const geometry::Pose& pose) { pose_cw_ = pose; }
   Eigen::Vector3d CameraCentre() const { return pose_cw_.inverse().translation(); }

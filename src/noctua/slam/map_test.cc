@@ -7,6 +7,7 @@
 
 #include "noctua/geometry/se3.h"
 #include "noctua/testing/test_camera.h"
+#include "noctua/util/error.h"
 
 namespace noctua::slam {
 namespace {
@@ -94,6 +95,27 @@ TEST_F(MapReclaimTest, PointsLeftByACulledKeyFrameAreFreed) {
   EXPECT_EQ(map_.ReclaimMapPoints({}), kPoints);
   EXPECT_EQ(map_.NumMapPointsAllocated(), 0);
   for (MapPoint* point : first_->map_points()) EXPECT_EQ(point, nullptr);
+}
+
+// A keyframe's features can be seen again (moved keypoints, the same ones in the same order),
+// never swapped for another set, nor given back to a culled keyframe.
+TEST_F(MapReclaimTest, FeaturesAreReplacedOnlyByAsManyKeyPoints) {
+  const FrameFeatures& before = first_->features();
+  const Eigen::Vector3d turn(0.0, 0.5, 0.0);  // rad/s
+  auto moved = std::make_shared<const FrameFeatures>(
+      before.AtMiddleRow(turn, Eigen::Vector3d::Zero(), 0.03));
+  first_->ReplaceFeatures(moved);
+  EXPECT_EQ(&first_->features(), moved.get());
+  EXPECT_GT((first_->features().undistorted(0) - before.undistorted(0)).norm(), 0.1);
+  const cv::Mat one(1, 32, CV_8U, cv::Scalar(0));
+  const cv::Mat depth(480, 640, CV_32F, cv::Scalar(2.0f));
+  auto fewer = std::make_shared<const FrameFeatures>(
+      std::vector<cv::KeyPoint>{cv::KeyPoint(100.0f, 100.0f, 31.0f)}, one, depth,
+      testing::TestCamera(), 40.0, 0.1);
+  EXPECT_THROW(first_->ReplaceFeatures(fewer), Error);
+  EXPECT_THROW(first_->ReplaceFeatures(nullptr), Error);
+  second_->SetBad();
+  EXPECT_THROW(second_->ReplaceFeatures(moved), Error);
 }
 
 // Features of one keypoint at 2 m, for keyframes whose poses alone matter.

@@ -153,6 +153,11 @@ TrackResult Tracker::Track(Frame frame) {
       } else {
         velocity_.reset();
       }
+      if (uncorrected_first_keyframe_ != nullptr && velocity_.has_value() &&
+          uncorrected_first_keyframe_->frame_id() == last_->id) {
+        CorrectFirstKeyFrame(*velocity_, current_->timestamp - last_->timestamp);
+      }
+      uncorrected_first_keyframe_ = nullptr;
       // Temporary visual-odometry points are no map points: forget them.
       for (std::size_t i = 0; i < current_->map_points.size(); ++i) {
         MapPoint* point = current_->map_points[i];
@@ -313,6 +318,27 @@ bool Tracker::CorrectRollingShutter(Frame& frame, const geometry::Pose& velocity
   return true;
 }
 
+void Tracker::CorrectFirstKeyFrame(const geometry::Pose& motion, double dt) {
+  KeyFrame& keyframe = *uncorrected_first_keyframe_;
+  if (dt <= 0.0 || keyframe.bad()) return;
+  const Eigen::AngleAxisd turn(motion.rotation());
+  keyframe.ReplaceFeatures(std::make_shared<const FrameFeatures>(keyframe.features().AtMiddleRow(
+      turn.axis() * (turn.angle() / dt), motion.translation() / dt, options_.rolling_shutter_s)));
+  // Its points were lifted from the uncorrected keypoints; those it alone observes move with them.
+  const FrameFeatures& features = keyframe.features();
+  const geometry::Pose world_from_camera = keyframe.pose_cw().inverse();
+  for (int i = 0; i < features.size(); ++i) {
+    MapPoint* point = keyframe.map_point(i);
+    if (point == nullptr || point->bad() || point->num_observations() != 1 ||
+        features.depth(i) <= 0.0) {
+      continue;
+    }
+    point->set_position(world_from_camera *
+                        features.camera().Unproject(features.undistorted(i), features.depth(i)));
+    point->UpdateNormalAndDepth(pyramid_);
+  }
+}
+
 bool Tracker::Initialise(Frame& frame) {
   if (frame.features->CountWithDepth() < options_.min_initial_points) return false;
   frame.pose_cw = geometry::Pose::Identity();
@@ -330,6 +356,7 @@ bool Tracker::Initialise(Frame& frame) {
   reference_ = last_keyframe_ = keyframe;
   last_keyframe_frame_id_ = frame.id;
   local_keyframes_ = {keyframe};
+  if (options_.rolling_shutter_s > 0.0) uncorrected_first_keyframe_ = keyframe;
   AddToDatabase(keyframe);
   return true;
 }

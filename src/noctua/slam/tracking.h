@@ -168,6 +168,10 @@ class Tracker {
   // `velocity` (T_frame_last) since the last frame; false (nothing done) without a rolling
   // shutter or when the last frame is not the one before.
   bool CorrectRollingShutter(Frame& frame, const geometry::Pose& velocity) const;
+  // The map's first keyframe had no motion to undo its rolling shutter with; once the frame after
+  // it is tracked, its keypoints and the points it placed are corrected with the motion between
+  // the two (`motion`: T_current_first, over `dt` seconds).
+  void CorrectFirstKeyFrame(const geometry::Pose& motion, double dt);
   bool Coast(TrackResult& result);
   void CreateNewKeyFrame();
   // Maps a new keyframe: all at once, or queued for AdvanceMapping (SlamOptions::
@@ -219,6 +223,8 @@ class Tracker {
   KeyFrame* reference_ = nullptr;
   KeyFrame* last_keyframe_ = nullptr;
   long last_keyframe_frame_id_ = 0;
+  // Set when the map starts on a frame whose rolling shutter is still to be corrected.
+  KeyFrame* uncorrected_first_keyframe_ = nullptr;
   long last_relocalisation_frame_id_ = -1000;
   int inliers_ = 0;
   // Inliers of the current frame that are the last frame's temporary depth points, not map points.
