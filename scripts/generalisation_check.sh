@@ -13,8 +13,9 @@
 # settings files of its own, CANDIDATE_FR1_CONFIG and CANDIDATE_BONN_CONFIG (default
 # config/tum_fr1.yaml and config/bonn.yaml, which the baseline uses; BASELINE_ARGS adds flags to
 # the baseline), and/or a build of its own, CANDIDATE_BIN (a change of code: the baseline is
-# NOCTUA_BIN, default build/noctua). Writes OUT/runs.csv (one line per run) and OUT/check.md (per method and set: mean ATE
-# RMSE (min–max), worst / best, frames lost, and the candidate's mean against the baseline's).
+# NOCTUA_BIN, default build/noctua). Writes OUT/runs.csv (one line per run) and OUT/check.md (per
+# method and set: mean ATE RMSE (min–max), worst / best, frames lost, and the candidate's mean
+# against the baseline's).
 # Runs already in OUT are kept (an OUT made with other settings is refused). About 6 min for
 # three methods on 2 cores.
 # Usage: CANDIDATE_ARGS="..." scripts/generalisation_check.sh [OUT (default generalisation)]
