@@ -9,6 +9,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "noctua/eval/trajectory_plot.h"
+#include "noctua/image/enhancement.h"
 #include "noctua/io/dataset.h"
 #include "noctua/io/output_dir.h"
 #include "noctua/pipeline/method.h"
@@ -118,7 +119,12 @@ void AddExtractorStages(const std::string& method, const features::ExtractionSta
     if (found == stats.stage_ms.end()) continue;
     const bool detector_stage = key == "dynamic-mask" || key == "dynamic-filter";
     if (detector_stage != (method == "paper+detector")) continue;
-    if (method == "noctua" && key == "enhance") continue;  // noctua enhances nothing
+    // An enhancement that ran as none is no stage of this method.
+    const std::string no_enhancement = "enhance:" + ToString(image::EnhancementMethod::kNone);
+    if (key == "enhance" && std::find(stats.stages_ran.begin(), stats.stages_ran.end(),
+                                      no_enhancement) != stats.stages_ran.end()) {
+      continue;
+    }
     table.Get("stage", prefix + label, "ExtractionStats of " + method).ms.Add(rep, found->second);
   }
 }

@@ -267,11 +267,9 @@ std::optional<Eigen::Vector3d> LocalMapper::TriangulatePair(const KeyFrame& firs
       (depth1 > 0.0 || depth2 > 0.0 || rays_cos < options_.triangulation.max_parallax_cos)) {
     position = TriangulateLinear(normalised1, first.pose_cw(), normalised2, second.pose_cw());
   } else if (depth1 > 0.0 && stereo_cos1 < stereo_cos2) {
-    position =
-        first.pose_cw().inverse() * features1.camera().Unproject(features1.undistorted(i), depth1);
+    position = first.Unproject(i);
   } else if (depth2 > 0.0 && stereo_cos2 < stereo_cos1) {
-    position =
-        second.pose_cw().inverse() * features2.camera().Unproject(features2.undistorted(j), depth2);
+    position = second.Unproject(j);
   }
   if (!position) return std::nullopt;
   if (!ReprojectsWell(first, i, *position) || !ReprojectsWell(second, j, *position)) {

@@ -140,6 +140,12 @@ KeyFrame::KeyFrame(long id, const Frame& frame)
       pose_cw_(frame.pose_cw),
       map_points_(frame.map_points) {}
 
+Eigen::Vector3d KeyFrame::Unproject(int i) const {
+  const FrameFeatures& keypoints = features();
+  return pose_cw_.inverse() *
+         keypoints.camera().Unproject(keypoints.undistorted(i), keypoints.depth(i));
+}
+
 void KeyFrame::ReplaceFeatures(std::shared_ptr<const FrameFeatures> features) {
   if (features_ == nullptr) ThrowReleasedFeatures();
   if (features == nullptr || features->size() != features_->size()) {

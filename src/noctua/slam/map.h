@@ -130,6 +130,8 @@ class KeyFrame {
   void ReplaceFeatures(std::shared_ptr<const FrameFeatures> features);
   const geometry::Pose& pose_cw() const { return pose_cw_; }
   void set_pose_cw(const geometry::Pose& pose) { pose_cw_ = pose; }
+  // Keypoint i lifted with its depth into world coordinates (as Frame::Unproject).
+  Eigen::Vector3d Unproject(int i) const;
   Eigen::Vector3d CameraCentre() const { return pose_cw_.inverse().translation(); }
   bool bad() const { return bad_; }
 

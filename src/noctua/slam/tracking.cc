@@ -306,35 +306,36 @@ void StartProbation(const Frame& frame, int i, MapPoint* point) {
 
 }  // namespace
 
+std::shared_ptr<const FrameFeatures> Tracker::AtMiddleRow(const FrameFeatures& features,
+                                                          const geometry::Pose& motion,
+                                                          double dt) const {
+  const Eigen::AngleAxisd turn(motion.rotation());
+  return std::make_shared<const FrameFeatures>(features.AtMiddleRow(
+      turn.axis() * (turn.angle() / dt), motion.translation() / dt, options_.rolling_shutter_s));
+}
+
 bool Tracker::CorrectRollingShutter(Frame& frame, const geometry::Pose& velocity) const {
   if (options_.rolling_shutter_s <= 0.0 || last_ == nullptr || last_->id != frame.id - 1) {
     return false;
   }
   const double dt = frame.timestamp - last_->timestamp;
   if (dt <= 0.0) return false;
-  const Eigen::AngleAxisd turn(velocity.rotation());
-  frame.features = std::make_shared<const FrameFeatures>(frame.features->AtMiddleRow(
-      turn.axis() * (turn.angle() / dt), velocity.translation() / dt, options_.rolling_shutter_s));
+  frame.features = AtMiddleRow(*frame.features, velocity, dt);
   return true;
 }
 
 void Tracker::CorrectFirstKeyFrame(const geometry::Pose& motion, double dt) {
   KeyFrame& keyframe = *uncorrected_first_keyframe_;
   if (dt <= 0.0 || keyframe.bad()) return;
-  const Eigen::AngleAxisd turn(motion.rotation());
-  keyframe.ReplaceFeatures(std::make_shared<const FrameFeatures>(keyframe.features().AtMiddleRow(
-      turn.axis() * (turn.angle() / dt), motion.translation() / dt, options_.rolling_shutter_s)));
+  keyframe.ReplaceFeatures(AtMiddleRow(keyframe.features(), motion, dt));
   // Its points were lifted from the uncorrected keypoints; those it alone observes move with them.
-  const FrameFeatures& features = keyframe.features();
-  const geometry::Pose world_from_camera = keyframe.pose_cw().inverse();
-  for (int i = 0; i < features.size(); ++i) {
+  for (int i = 0; i < keyframe.features().size(); ++i) {
     MapPoint* point = keyframe.map_point(i);
     if (point == nullptr || point->bad() || point->num_observations() != 1 ||
-        features.depth(i) <= 0.0) {
+        keyframe.features().depth(i) <= 0.0) {
       continue;
     }
-    point->set_position(world_from_camera *
-                        features.camera().Unproject(features.undistorted(i), features.depth(i)));
+    point->set_position(keyframe.Unproject(i));
     point->UpdateNormalAndDepth(pyramid_);
   }
 }

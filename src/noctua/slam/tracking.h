@@ -167,6 +167,9 @@ class Tracker {
   // those its middle row would have seen (FrameFeatures::AtMiddleRow), the camera moving by
   // `velocity` (T_frame_last) since the last frame; false (nothing done) without a rolling
   // shutter or when the last frame is not the one before.
+  // `features` as the middle row saw them, for a camera that moved by `motion` over `dt` s.
+  std::shared_ptr<const FrameFeatures> AtMiddleRow(const FrameFeatures& features,
+                                                   const geometry::Pose& motion, double dt) const;
   bool CorrectRollingShutter(Frame& frame, const geometry::Pose& velocity) const;
   // The map's first keyframe had no motion to undo its rolling shutter with; once the frame after
   // it is tracked, its keypoints and the points it placed are corrected with the motion between
