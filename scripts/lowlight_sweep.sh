@@ -13,14 +13,25 @@
 # QUICK=1: 60 frames, orb and paper, models kinect and webcam, levels 100 and 15, two seeds
 # (a few minutes). NOCTUA_METHODS, NOCTUA_SENSORS, NOCTUA_LEVELS, NOCTUA_SEEDS, NOCTUA_FRAMES
 # (0: all) override either mode; NOCTUA_JOBS runs that many commands at once (default 2).
+# NOCTUA_SCENE=crowd sweeps bonn_crowd_120 instead (real people walking around a hand-held Xtion,
+# config/bonn.yaml), its SLAM runs with YOLOv8n's dynamic regions: the held-out check of the
+# same methods and models where people cover the view.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 out=${1:-lowlight-sweep}
 shared=${NOCTUA_SHARED_DIR:-$root/../shared}
 noctua=${NOCTUA_BIN:-$root/build/noctua}
 jobs=${NOCTUA_JOBS:-2}
-dataset=$shared/data/tum_fr1_rpy_200
-config=$root/config/tum_fr1.yaml
+scene=${NOCTUA_SCENE:-fr1}
+detector=""
+case $scene in
+  fr1) dataset=$shared/data/tum_fr1_rpy_200 config=$root/config/tum_fr1.yaml ;;
+  crowd)
+    dataset=$shared/data/bonn_crowd_120 config=$root/config/bonn.yaml
+    detector=$shared/models/yolov8n/yolov8n_head_f32.onnx
+    ;;
+  *) echo "lowlight_sweep: NOCTUA_SCENE must be fr1 or crowd, not '$scene'" >&2; exit 1 ;;
+esac
 if [ "${QUICK:-0}" = 1 ]; then
   d_methods="orb paper" d_sensors="kinect webcam" d_levels="100 15" d_seeds="1 2" d_frames=60
 else
@@ -31,7 +42,7 @@ methods=${NOCTUA_METHODS:-$d_methods}
 levels=${NOCTUA_LEVELS:-$d_levels}
 seeds=${NOCTUA_SEEDS:-$d_seeds}
 frames=${NOCTUA_FRAMES:-$d_frames}
-for file in "$noctua" "$dataset/associations.txt" "$config"; do
+for file in "$noctua" "$dataset/rgb.txt" "$config" ${detector:+"$detector"}; do
   [ -e "$file" ] || { echo "lowlight_sweep: $file: not found (run scripts/setup.sh first)" >&2; exit 1; }
 done
 command -v jq >/dev/null || { echo "lowlight_sweep: needs jq (apt-get install jq)" >&2; exit 1; }
@@ -73,6 +84,7 @@ slam_one() {
     args=(--dataset "$out/seq/${sensor}_${level}_s$seed")
   fi
   echo "lowlight_sweep: slam $method $sensor $level% seed $seed" >&2
+  [ -z "$detector" ] || args+=(--detector "$detector")
   "$noctua" slam "${args[@]}" --config "$config" --method "$method" --max-frames "$frames" \
     --out "$dir" --force --progress-every 100000 --deterministic >/dev/null 2>"$dir.log" ||
     { echo "lowlight_sweep: $dir failed" >&2; return 1; }
@@ -91,7 +103,7 @@ eval_one() {
     { echo "lowlight_sweep: $dir failed" >&2; return 1; }
 }
 export -f simulate_one slam_one eval_one
-export out dataset config noctua frames methods
+export out dataset config detector noctua frames methods
 export first_seed=$1
 xargs -P "$jobs" -L 1 bash -c 'simulate_one "$@"' _ <"$cases"
 while read -r sensor level seed; do
@@ -145,7 +157,7 @@ if command -v gnuplot >/dev/null; then
   {
     echo "set terminal pngcairo size $((420 * $#)),400 noenhanced"
     echo "set output '$out/sweep.png'"
-    echo "set multiplot layout 1,$# title 'tum_fr1_rpy_200: SLAM ATE RMSE (mean over seeds) against light'"
+    echo "set multiplot layout 1,$# title '$(basename "$dataset")${detector:+ (YOLOv8n)}: SLAM ATE RMSE (mean over seeds) against light'"
     echo "set logscale x; set xrange [6:120]; set xtics (8, 15, 30, 100); set grid"
     echo "set xlabel 'mean grey, % of recorded'; set ylabel 'ATE RMSE (m)'; set key top right"
     for sensor in $sensors; do
