@@ -1048,6 +1048,19 @@ TEST_F(RgbdSlamTest, BadConfigAndBadDataFailClearly) {
   EXPECT_TRUE(defaults.smooth_trajectory);
   EXPECT_FALSE(LoadSlamSetup(write(camera + "slam:\n  smooth_trajectory: false\n"))
                    .options.smooth_trajectory);
+  EXPECT_EQ(defaults.min_tracked_inliers, 30);
+  EXPECT_EQ(defaults.min_inliers_after_relocalisation, 50);
+  const SlamOptions bars =
+      LoadSlamSetup(write(camera +
+                          "slam:\n  min_tracked_inliers: 50\n  min_inliers_after_relocalisation: "
+                          "60\n  certain_sigma_ratio: 1.5\n"))
+          .options;
+  EXPECT_EQ(bars.min_tracked_inliers, 50);
+  EXPECT_EQ(bars.min_inliers_after_relocalisation, 60);
+  EXPECT_EQ(bars.certain_sigma_ratio, 1.5);
+  EXPECT_THAT(
+      error_of([&] { LoadSlamSetup(write(camera + "slam:\n  min_tracked_inliers: 60\n")); }),
+      HasSubstr("min_inliers_after_relocalisation must be at least min_tracked_inliers"));
   EXPECT_TRUE(defaults.bridge_coasted_frames);
   const SlamOptions coasting =
       LoadSlamSetup(

@@ -106,6 +106,9 @@ void ReadSlamSection(const YAML::Node& root, const std::string& source, SlamOpti
                                                "triangulation_covisibles",
                                                "max_depth_m",
                                                "max_coasting_frames",
+                                               "min_tracked_inliers",
+                                               "min_inliers_after_relocalisation",
+                                               "certain_sigma_ratio",
                                                "bridge_coasted_frames",
                                                "motion_prior_acceleration_mps2",
                                                "motion_prior_outlier_sigmas",
@@ -127,6 +130,10 @@ void ReadSlamSection(const YAML::Node& root, const std::string& source, SlamOpti
   io::ReadSetting(section, "triangulation_covisibles", source, options.triangulation.covisibles);
   io::ReadSetting(section, "max_depth_m", source, options.max_depth_m);
   io::ReadSetting(section, "max_coasting_frames", source, options.max_coasting_frames);
+  io::ReadSetting(section, "min_tracked_inliers", source, options.min_tracked_inliers);
+  io::ReadSetting(section, "min_inliers_after_relocalisation", source,
+                  options.min_inliers_after_relocalisation);
+  io::ReadSetting(section, "certain_sigma_ratio", source, options.certain_sigma_ratio);
   io::ReadSetting(section, "bridge_coasted_frames", source, options.bridge_coasted_frames);
   io::ReadSetting(section, "motion_prior_acceleration_mps2", source,
                   options.motion_prior_acceleration_mps2);
