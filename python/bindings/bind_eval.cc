@@ -47,6 +47,8 @@ py::dict ScoreToDict(const eval::MethodScore& score) {
     row["no_depth"] = p.no_depth;
     row["on_dynamic"] = p.on_dynamic;
     row["correct"] = p.correct;
+    row["comparable"] = p.comparable;
+    row["repeated"] = p.repeated;
     pairs.append(row);
   }
   py::dict dict;

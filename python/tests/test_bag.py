@@ -91,6 +91,10 @@ def test_evaluate_features_on_a_bag_scores_every_pair_as_on_the_folder(bag, tum_
     assert len(b["pairs"]) == 15
     assert b["pairs"] == a["pairs"]
     assert sum(p["matches"] for p in a["pairs"]) > 15 * 50
+    # Every pair says how many of frame i's corners frame j found again, more at a wider tau.
+    assert all(p["repeated"] == sorted(p["repeated"]) and p["repeated"][-1] <= p["comparable"]
+               for p in a["pairs"])
+    assert sum(p["repeated"][0] for p in a["pairs"]) > 0
     assert (tmp_path / "eval" / "pairs.csv").exists()
     with pytest.raises(noctua.Error, match=r"fr1\.bag.*--groundtruth"):
         noctua.evaluate_features(bag=bag, **common)

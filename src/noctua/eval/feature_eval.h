@@ -37,9 +37,11 @@ struct PairScore {
   int frame_i = 0;
   int frame_j = 0;
   int matches = 0;
-  int no_depth = 0;          // matches whose point in frame i has no depth (not judged)
-  int on_dynamic = 0;        // matches touching a moving object (judged wrong)
-  std::vector<int> correct;  // per tau
+  int no_depth = 0;           // matches whose point in frame i has no depth (not judged)
+  int on_dynamic = 0;         // matches touching a moving object (judged wrong)
+  std::vector<int> correct;   // per tau
+  int comparable = 0;         // frame i's points that frame j sees (Repeatability)
+  std::vector<int> repeated;  // per tau: of those, the ones frame j detected again
 };
 
 struct MethodScore {
@@ -116,14 +118,16 @@ struct MethodSummary {
   double mean_on_dynamic = 0.0;
   std::vector<double> mean_correct;  // per tau, per pair
   std::vector<double> rate;          // per tau: correct / judged (matches with depth)
+  // Per tau: repeated / comparable over all pairs, whatever the descriptors say (Repeatability).
+  std::vector<double> repeatability;
 };
 MethodSummary Summarize(const MethodScore& score, std::size_t num_taus);
 
 // The mean count of each block of 10 frames (the paper's Figures 8 and 11).
 std::vector<double> MeanPerTenFrames(const std::vector<FrameCount>& counts);
 
-// Markdown table: methods x count, matches, correct matches and rate at the default tau, and the
-// rate at every tau.
+// Markdown table: methods x count, matches, correct matches, rate and repeatability at the
+// default tau, and the rate at every tau.
 std::string SummaryMarkdown(const FeatureEvalResult& result);
 
 // Writes counts.csv, counts_mean10.csv, pairs.csv, errors.csv, summary.md, summary.json, the

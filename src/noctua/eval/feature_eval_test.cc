@@ -30,13 +30,24 @@ TEST(MeanPerTenFrames, AveragesEachBlockIncludingAShortLastOne) {
 TEST(Summarize, RatesAreCorrectOverMatchesWithDepth) {
   MethodScore score;
   score.counts = {{0, 0, 10, 0}, {1, 0, 30, 0}};
-  score.pairs = {{0, 1, 10, 2, 0, {4, 6}}, {1, 2, 20, 0, 3, {10, 12}}};
+  score.pairs = {{0, 1, 10, 2, 0, {4, 6}, 0, {}}, {1, 2, 20, 0, 3, {10, 12}, 0, {}}};
   const MethodSummary s = Summarize(score, 2);
   EXPECT_DOUBLE_EQ(s.mean_count, 20.0);
   EXPECT_DOUBLE_EQ(s.mean_matches, 15.0);
   EXPECT_DOUBLE_EQ(s.mean_no_depth, 1.0);
   EXPECT_DOUBLE_EQ(s.rate[0], 14.0 / 28.0);
   EXPECT_DOUBLE_EQ(s.rate[1], 18.0 / 28.0);
+}
+
+TEST(Summarize, RepeatabilityPoolsThePairs) {
+  MethodScore score;
+  score.pairs = {{0, 1, 10, 2, 0, {4, 6}, 100, {30, 60}},
+                 {1, 2, 20, 0, 3, {10, 12}, 300, {50, 180}}};
+  const MethodSummary s = Summarize(score, 2);
+  EXPECT_DOUBLE_EQ(s.repeatability[0], 80.0 / 400.0);
+  EXPECT_DOUBLE_EQ(s.repeatability[1], 240.0 / 400.0);
+  score.pairs = {{0, 1, 0, 0, 0, {0, 0}, 0, {0, 0}}};
+  EXPECT_EQ(Summarize(score, 2).repeatability, (std::vector<double>{0.0, 0.0}));
 }
 
 // With the walking person composited in, matches on it are found (its clothing is textured)
@@ -82,6 +93,9 @@ TEST(EvaluateFeatures, GeneratedPlaneSceneIsGeometricallyConsistent) {
   EXPECT_GT(summary.mean_matches, 100.0);
   EXPECT_GT(summary.rate[0], 0.9);
   EXPECT_EQ(summary.mean_no_depth, 0.0);
+  // The wall is sharp and noise-free: most corners are found again where the pose puts them.
+  EXPECT_GT(summary.repeatability[0], 0.5);
+  EXPECT_LE(summary.repeatability[0], summary.repeatability[2]);
   fs::remove_all(dir);
 }
 

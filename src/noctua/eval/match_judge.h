@@ -41,6 +41,25 @@ std::vector<JudgedMatch> JudgeMatches(const std::vector<cv::KeyPoint>& keypoints
                                       const std::vector<cv::DMatch>& matches,
                                       const PairGeometry& geometry);
 
+// How many of frame i's points frame j detected again, whatever their descriptors say: the share
+// separates what the detector loses (a corner not found again where it should be) from what the
+// descriptor loses (a corner found again but not matched).
+struct Repeatability {
+  int comparable = 0;         // points of frame i with depth, on no moving object, that land in
+                              // frame j's image at least border_px inside it
+  std::vector<int> repeated;  // per tau: of those, the ones with a point of frame j within tau px
+};
+
+// Lifts every point of frame i that has depth with it, moves it by the ground-truth relative
+// pose and projects it into frame j (as JudgeMatches does), and looks for the nearest point of
+// frame j. `border_px` leaves out points landing where a detector keeps no points (its border).
+// `taus_px` must be positive and ascending. Throws noctua::Error for a depth or mask image of the
+// wrong type or size.
+Repeatability MeasureRepeatability(const std::vector<cv::KeyPoint>& keypoints_i,
+                                   const std::vector<cv::KeyPoint>& keypoints_j,
+                                   const PairGeometry& geometry, const std::vector<double>& taus_px,
+                                   double border_px);
+
 // A match is correct when it has depth, is on no moving object, and lands within tau pixels.
 inline bool IsCorrect(const JudgedMatch& judged, double tau_px) {
   return judged.has_depth && !judged.on_dynamic && judged.error_px >= 0.0 &&

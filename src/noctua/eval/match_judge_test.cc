@@ -179,5 +179,102 @@ TEST(ChooseTau, FollowsTheSpreadOfTrueMatches) {
   EXPECT_EQ(ChooseTau(loose, {3, 5, 10}), 10.0);
 }
 
+// The points of a known warp, as frame i's grid and where each lands in frame j.
+struct WarpedGrid {
+  std::vector<cv::KeyPoint> points_i;
+  std::vector<cv::KeyPoint> points_j;
+};
+
+WarpedGrid WarpGrid(const geometry::PinholeCamera& camera, const cv::Mat& depth,
+                    const geometry::Pose& motion, double margin_px) {
+  WarpedGrid grid;
+  for (int y = 60; y < 420; y += 30) {
+    for (int x = 60; x < 580; x += 30) {
+      const Eigen::Vector2d u = camera.Undistort(Eigen::Vector2d(x, y));
+      const Eigen::Vector3d p = motion * camera.Unproject(u, depth.at<float>(y, x));
+      const Eigen::Vector2d in_j = camera.Distort(camera.Project(p));
+      if (in_j.x() < margin_px || in_j.y() < margin_px || in_j.x() > 639 - margin_px ||
+          in_j.y() > 479 - margin_px) {
+        continue;
+      }
+      grid.points_i.emplace_back(cv::Point2f(x, y), 7.0f);
+      grid.points_j.emplace_back(cv::Point2f(in_j.x(), in_j.y()), 7.0f);
+    }
+  }
+  return grid;
+}
+
+TEST(MeasureRepeatability, CountsThePointsFrameJFindsAgainWithinEachTau) {
+  const geometry::PinholeCamera camera = Fr1Camera(true);
+  const cv::Mat depth = PlaneDepth(camera);
+  const geometry::Pose motion = KnownMotion();
+  const WarpedGrid grid = WarpGrid(camera, depth, motion, 20.0);
+  ASSERT_GT(grid.points_i.size(), 150u);
+  const int n = static_cast<int>(grid.points_i.size());
+  const PairGeometry geometry{camera, motion, depth, {}, {}};
+  const std::vector<double> taus = {3, 5, 10};
+
+  const Repeatability exact =
+      MeasureRepeatability(grid.points_i, grid.points_j, geometry, taus, 19);
+  EXPECT_EQ(exact.comparable, n);
+  EXPECT_EQ(exact.repeated, (std::vector<int>{n, n, n}));
+
+  // Frame j found every corner again, 4 px off: repeated at 5 px, not at 3.
+  std::vector<cv::KeyPoint> shifted = grid.points_j;
+  for (auto& point : shifted) point.pt += cv::Point2f(4.0f, 0.0f);
+  const Repeatability off = MeasureRepeatability(grid.points_i, shifted, geometry, taus, 19);
+  EXPECT_EQ(off.repeated, (std::vector<int>{0, n, n}));
+
+  // Frame j lost half of them: half repeated, whatever tau.
+  std::vector<cv::KeyPoint> half;
+  for (int k = 0; k < n; k += 2) half.push_back(grid.points_j[static_cast<std::size_t>(k)]);
+  const Repeatability lost = MeasureRepeatability(grid.points_i, half, geometry, taus, 19);
+  EXPECT_EQ(lost.repeated[0], (n + 1) / 2);
+  EXPECT_EQ(lost.repeated[2], (n + 1) / 2);
+
+  // Nothing in frame j: every point is comparable and none repeated.
+  const Repeatability none = MeasureRepeatability(grid.points_i, {}, geometry, taus, 19);
+  EXPECT_EQ(none.comparable, n);
+  EXPECT_EQ(none.repeated, (std::vector<int>{0, 0, 0}));
+}
+
+TEST(MeasureRepeatability, LeavesOutPointsWithoutDepthOnPeopleOrLandingInTheBorder) {
+  const geometry::PinholeCamera camera = Fr1Camera(false);
+  const cv::Mat depth = PlaneDepth(camera);
+  const geometry::Pose motion = KnownMotion();
+  const WarpedGrid grid = WarpGrid(camera, depth, motion, 0.0);
+  const int n = static_cast<int>(grid.points_i.size());
+  int in_border = 0;
+  for (const auto& point : grid.points_j) {
+    if (point.pt.x < 40 || point.pt.y < 40 || point.pt.x > 599 || point.pt.y > 439) ++in_border;
+  }
+  ASSERT_GT(in_border, 0);
+  const std::vector<double> taus = {3};
+  const PairGeometry plain{camera, motion, depth, {}, {}};
+  EXPECT_EQ(MeasureRepeatability(grid.points_i, grid.points_j, plain, taus, 40).comparable,
+            n - in_border);
+
+  // A point off the depth grid has no depth; a person over the left half of frame i hides those.
+  std::vector<cv::KeyPoint> with_no_depth = grid.points_i;
+  with_no_depth.emplace_back(cv::Point2f(331, 301), 7.0f);  // right half, off the grid
+  cv::Mat person(camera.size(), CV_8UC1, cv::Scalar(0));
+  person.colRange(0, 320).setTo(255);
+  int right_half = 0;
+  for (const auto& point : grid.points_i) right_half += point.pt.x >= 320 ? 1 : 0;
+  const PairGeometry with_person{camera, motion, depth, person, {}};
+  const Repeatability r = MeasureRepeatability(with_no_depth, grid.points_j, with_person, taus, 0);
+  EXPECT_EQ(r.comparable, right_half);
+  EXPECT_EQ(r.repeated[0], right_half);
+}
+
+TEST(MeasureRepeatability, RefusesBadTausAndDepth) {
+  const geometry::PinholeCamera camera = Fr1Camera(false);
+  const PairGeometry geometry{camera, KnownMotion(), PlaneDepth(camera), {}, {}};
+  EXPECT_THROW(MeasureRepeatability({}, {}, geometry, {}, 0), Error);
+  EXPECT_THROW(MeasureRepeatability({}, {}, geometry, {5, 3}, 0), Error);
+  const PairGeometry eight_bit{camera, KnownMotion(), cv::Mat(480, 640, CV_8UC1), {}, {}};
+  EXPECT_THROW(MeasureRepeatability({}, {}, eight_bit, {3}, 0), Error);
+}
+
 }  // namespace
 }  // namespace noctua::eval
