@@ -126,6 +126,8 @@ py::dict MatchWarpedPairPy(const py::object& photo, const std::string& method_na
   dict["keypoints"] = result.keypoints;
   dict["matches"] = result.matches;
   dict["correct"] = result.correct;
+  dict["comparable"] = result.comparable;
+  dict["repeated"] = result.repeated;
   dict["noise_sigma"] = result.noise_sigma;
   return dict;
 }

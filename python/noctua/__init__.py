@@ -158,7 +158,9 @@ def match_warped_pair(photo, method="noctua", config=None, rotation_deg=8.0, sca
     ``fresh_noise_multiple`` times the photo's own estimated noise (its real noise would otherwise
     repeat like texture). Ratio-test matches (``ratio``) are correct when the warp maps their
     point within ``correct_px`` of the partner. ``config``: a settings file for the extractor
-    (None: defaults). Returns a dict: ``keypoints``, ``matches``, ``correct``, ``noise_sigma``.
+    (None: defaults). Returns a dict: ``keypoints``, ``matches``, ``correct``, ``noise_sigma``,
+    and, whatever the descriptors say, ``comparable`` (the photo's points the warp keeps inside
+    the copy) and ``repeated`` (of those, the ones the copy detected within ``correct_px``).
     """
     return _noctua.match_warped_pair(photo, method, _path(config), rotation_deg, scale, ratio,
                                      correct_px, fresh_noise_multiple, seed)
@@ -177,7 +179,8 @@ def evaluate_features(dataset=None, bag=None, camera=None, groundtruth=None,
     the frames with ground truth (0: all). With ``out``, writes the command's report there.
     Returns a dict: ``dataset``, ``taus``, ``default_tau``, ``markdown`` (the summary table) and
     ``methods``: per method name, ``counts`` (frame, timestamp, count, extract_ms) and ``pairs``
-    (frame_i, frame_j, matches, no_depth, on_dynamic, correct per tau).
+    (frame_i, frame_j, matches, no_depth, on_dynamic, correct per tau, comparable, repeated
+    per tau: frame i's points that frame j sees and, of those, the ones it detected again).
     """
     if camera is None and dataset is not None:
         camera = _os.path.join(_os.fspath(dataset), "camera.yaml")

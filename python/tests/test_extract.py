@@ -72,5 +72,6 @@ def test_warped_pair_on_a_real_dark_photo(shared_dir):
     assert noctua_pair["noise_sigma"] == orb_pair["noise_sigma"] > 0
     assert 0 < noctua_pair["correct"] <= noctua_pair["matches"] <= noctua_pair["keypoints"]
     assert noctua_pair["correct"] > orb_pair["correct"]
+    assert noctua_pair["correct"] <= noctua_pair["repeated"] <= noctua_pair["comparable"]
     with pytest.raises(noctua.Error, match="scale"):
         noctua.match_warped_pair(photo, scale=0)

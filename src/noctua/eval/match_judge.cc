@@ -78,48 +78,38 @@ Landing LandingInJ(const cv::Point2f& detected, const cv::Point2f& undistorted,
   return landing;
 }
 
-// Frame j's points bucketed in square cells of `cell` px, so that the nearest point within
-// `cell` px is found among the 3x3 cells around a position.
-class PointGrid {
- public:
-  PointGrid(const std::vector<cv::KeyPoint>& points, cv::Size size, double cell)
-      : cell_(cell),
-        cols_(static_cast<int>(std::ceil(size.width / cell)) + 1),
-        rows_(static_cast<int>(std::ceil(size.height / cell)) + 1),
-        cells_(static_cast<std::size_t>(cols_ * rows_)) {
-    for (const auto& point : points) {
-      const int cx = CellOf(point.pt.x, cols_);
-      const int cy = CellOf(point.pt.y, rows_);
-      cells_[static_cast<std::size_t>(cy * cols_ + cx)].push_back(point.pt);
-    }
-  }
+}  // namespace
 
-  double NearestDistance(const Eigen::Vector2d& at) const {
-    const int cx = CellOf(at.x(), cols_);
-    const int cy = CellOf(at.y(), rows_);
-    double best = std::numeric_limits<double>::infinity();
-    for (int y = std::max(0, cy - 1); y <= std::min(rows_ - 1, cy + 1); ++y) {
-      for (int x = std::max(0, cx - 1); x <= std::min(cols_ - 1, cx + 1); ++x) {
-        for (const auto& point : cells_[static_cast<std::size_t>(y * cols_ + x)]) {
-          best = std::min(best, std::hypot(point.x - at.x(), point.y - at.y()));
-        }
+PointGrid::PointGrid(const std::vector<cv::KeyPoint>& points, cv::Size size, double cell_px)
+    : cell_(cell_px) {
+  CheckOption(cell_px > 0.0, "point grid: the cell size must be positive");
+  cols_ = static_cast<int>(std::ceil(size.width / cell_px)) + 1;
+  rows_ = static_cast<int>(std::ceil(size.height / cell_px)) + 1;
+  cells_.resize(static_cast<std::size_t>(cols_ * rows_));
+  for (const auto& point : points) {
+    const int cx = CellOf(point.pt.x, cols_);
+    const int cy = CellOf(point.pt.y, rows_);
+    cells_[static_cast<std::size_t>(cy * cols_ + cx)].push_back(point.pt);
+  }
+}
+
+double PointGrid::NearestDistance(const Eigen::Vector2d& at) const {
+  const int cx = CellOf(at.x(), cols_);
+  const int cy = CellOf(at.y(), rows_);
+  double best = std::numeric_limits<double>::infinity();
+  for (int y = std::max(0, cy - 1); y <= std::min(rows_ - 1, cy + 1); ++y) {
+    for (int x = std::max(0, cx - 1); x <= std::min(cols_ - 1, cx + 1); ++x) {
+      for (const auto& point : cells_[static_cast<std::size_t>(y * cols_ + x)]) {
+        best = std::min(best, std::hypot(point.x - at.x(), point.y - at.y()));
       }
     }
-    return best;
   }
+  return best;
+}
 
- private:
-  int CellOf(double v, int count) const {
-    return std::clamp(static_cast<int>(std::floor(v / cell_)), 0, count - 1);
-  }
-
-  double cell_;
-  int cols_;
-  int rows_;
-  std::vector<std::vector<cv::Point2f>> cells_;
-};
-
-}  // namespace
+int PointGrid::CellOf(double v, int count) const {
+  return std::clamp(static_cast<int>(std::floor(v / cell_)), 0, count - 1);
+}
 
 std::vector<JudgedMatch> JudgeMatches(const std::vector<cv::KeyPoint>& keypoints_i,
                                       const std::vector<cv::KeyPoint>& keypoints_j,

@@ -41,6 +41,25 @@ std::vector<JudgedMatch> JudgeMatches(const std::vector<cv::KeyPoint>& keypoints
                                       const std::vector<cv::DMatch>& matches,
                                       const PairGeometry& geometry);
 
+// Points bucketed in square cells of `cell_px`, so that the nearest point within `cell_px` of a
+// position is found among the 3x3 cells around it.
+class PointGrid {
+ public:
+  // Throws noctua::Error for a cell size that is not positive.
+  PointGrid(const std::vector<cv::KeyPoint>& points, cv::Size size, double cell_px);
+  // The distance to the nearest point; exact up to `cell_px`, beyond it possibly larger, and
+  // infinity when no point lies near.
+  double NearestDistance(const Eigen::Vector2d& at) const;
+
+ private:
+  int CellOf(double v, int count) const;
+
+  double cell_ = 1.0;
+  int cols_ = 0;
+  int rows_ = 0;
+  std::vector<std::vector<cv::Point2f>> cells_;
+};
+
 // How many of frame i's points frame j detected again, whatever their descriptors say: the share
 // separates what the detector loses (a corner not found again where it should be) from what the
 // descriptor loses (a corner found again but not matched).

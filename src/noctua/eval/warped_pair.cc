@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "noctua/eval/match_judge.h"
+#include "noctua/features/ofast.h"
 #include "noctua/image/noise.h"
 #include "noctua/util/error.h"
 
@@ -26,6 +27,29 @@ double PhotoNoise(const cv::Mat& photo) {
   cv::Mat grey = photo;
   if (photo.channels() == 3) cv::cvtColor(photo, grey, cv::COLOR_BGR2GRAY);
   return image::EstimateNoiseSigmaAcrossScales(grey);
+}
+
+// The same border for every method: none is counted as losing corners where ORB-SLAM's geometry
+// keeps none.
+void CountRepeated(const std::vector<cv::KeyPoint>& in_photo,
+                   const std::vector<cv::KeyPoint>& in_copy, const cv::Mat& affine, cv::Size size,
+                   double within_px, WarpedPairResult& result) {
+  if (in_photo.empty()) return;
+  std::vector<cv::Point2f> points;
+  points.reserve(in_photo.size());
+  for (const auto& keypoint : in_photo) points.push_back(keypoint.pt);
+  std::vector<cv::Point2f> moved;
+  cv::transform(points, moved, affine);
+  const PointGrid grid(in_copy, size, within_px);
+  const auto border = static_cast<float>(features::kEdgeThreshold);
+  for (const cv::Point2f& at : moved) {
+    if (at.x < border || at.y < border || at.x > static_cast<float>(size.width - 1) - border ||
+        at.y > static_cast<float>(size.height - 1) - border) {
+      continue;
+    }
+    ++result.comparable;
+    if (grid.NearestDistance(Eigen::Vector2d(at.x, at.y)) <= within_px) ++result.repeated;
+  }
 }
 
 }  // namespace
@@ -54,6 +78,7 @@ WarpedPairResult MatchWarpedPair(pipeline::FeatureMethod& method, const cv::Mat&
   const features::Extraction a = method.Run(WithFreshNoise(photo, fresh, seed));
   const features::Extraction b = method.Run(WithFreshNoise(warped, fresh, seed + 1));
   result.keypoints = static_cast<int>(a.keypoints.size());
+  CountRepeated(a.keypoints, b.keypoints, affine, photo.size(), options.correct_px, result);
   if (a.descriptors.empty() || b.descriptors.empty()) return result;
   const std::vector<cv::DMatch> matches =
       MatchWithRatioTest(a.descriptors, b.descriptors, method.norm_type(), options.ratio);

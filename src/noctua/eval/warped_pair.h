@@ -27,6 +27,10 @@ struct WarpedPairResult {
   int keypoints = 0;  // in the photo
   int matches = 0;    // kept by the ratio test
   int correct = 0;
+  // Whatever the descriptors say: the photo's points that the warp maps into the copy, at least
+  // kEdgeThreshold inside it, and of those the ones the copy detected within correct_px.
+  int comparable = 0;
+  int repeated = 0;
   double noise_sigma = 0.0;  // the photo's estimated noise, grey levels
 };
 
