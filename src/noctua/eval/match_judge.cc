@@ -108,7 +108,8 @@ double PointGrid::NearestDistance(const Eigen::Vector2d& at) const {
 }
 
 int PointGrid::CellOf(double v, int count) const {
-  return std::clamp(static_cast<int>(std::floor(v / cell_)), 0, count - 1);
+  // Clamped before the cast: a position far outside the image must not overflow an int.
+  return static_cast<int>(std::clamp(std::floor(v / cell_), 0.0, static_cast<double>(count - 1)));
 }
 
 std::vector<JudgedMatch> JudgeMatches(const std::vector<cv::KeyPoint>& keypoints_i,

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <limits>
 #include <numeric>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/features2d.hpp>
@@ -202,6 +203,20 @@ WarpedGrid WarpGrid(const geometry::PinholeCamera& camera, const cv::Mat& depth,
     }
   }
   return grid;
+}
+
+TEST(PointGrid, FindsTheNearestPointWithinItsCell) {
+  const std::vector<cv::KeyPoint> points = {
+      {cv::Point2f(10, 10), 7}, {cv::Point2f(14, 10), 7}, {cv::Point2f(300, 200), 7}};
+  const PointGrid grid(points, cv::Size(640, 480), 5.0);
+  EXPECT_DOUBLE_EQ(grid.NearestDistance(Eigen::Vector2d(13, 10)), 1.0);
+  EXPECT_DOUBLE_EQ(grid.NearestDistance(Eigen::Vector2d(300, 203)), 3.0);
+  EXPECT_EQ(grid.NearestDistance(Eigen::Vector2d(500, 400)),
+            std::numeric_limits<double>::infinity());
+  // Far outside the image: no point near, and no overflow finding the cell.
+  EXPECT_EQ(grid.NearestDistance(Eigen::Vector2d(-1e12, 1e12)),
+            std::numeric_limits<double>::infinity());
+  EXPECT_THROW(PointGrid(points, cv::Size(640, 480), 0.0), Error);
 }
 
 TEST(MeasureRepeatability, CountsThePointsFrameJFindsAgainWithinEachTau) {
