@@ -268,7 +268,7 @@ TEST_F(CliTest, SimulateThenEvalWriteATumSequenceAndTheReport) {
   ASSERT_EQ(evaluated.exit_code, 0) << evaluated.output;
   EXPECT_THAT(evaluated.output, HasSubstr("| sift |"));
   for (const char* file : {"summary.md", "counts.csv", "pairs.csv", "counts.png",
-                           "correct_rate.png", "matches_orb.png"}) {
+                           "correct_rate.png", "repeatability.png", "matches_orb.png"}) {
     EXPECT_TRUE(std::filesystem::is_regular_file(report / file)) << file;
   }
   // Bad input: an unknown method and a folder without ground truth, each with a one-line reason.

@@ -411,7 +411,7 @@ void WriteFeatureEvalReport(const FeatureEvalResult& result, const fs::path& dir
   WriteFile(dir / "summary.md", md.str());
 
   // Plots: one data block per method (gnuplot's index), so every method is one line or bar.
-  std::ostringstream count_data, mean10_data, rate_data, hist_data;
+  std::ostringstream count_data, mean10_data, rate_data, repeat_data, hist_data;
   const std::size_t d = DefaultTauIndex(result);
   for (std::size_t m = 0; m < result.methods.size(); ++m) {
     const auto& method = result.methods[m];
@@ -426,6 +426,9 @@ void WriteFeatureEvalReport(const FeatureEvalResult& result, const fs::path& dir
     rate_data << '"' << method.method << '"';
     for (const double rate : s.rate) rate_data << ' ' << rate;
     rate_data << "\n";
+    repeat_data << '"' << method.method << '"';
+    for (const double share : s.repeatability) repeat_data << ' ' << share;
+    repeat_data << "\n";
     hist_data << "# " << method.method << "\n";
     std::vector<int> bins(30, 0);
     for (const double e : method.errors_px) {
@@ -437,6 +440,7 @@ void WriteFeatureEvalReport(const FeatureEvalResult& result, const fs::path& dir
   WriteFile(dir / "counts.dat", count_data.str());
   WriteFile(dir / "counts_mean10.dat", mean10_data.str());
   WriteFile(dir / "correct_rate.dat", rate_data.str());
+  WriteFile(dir / "repeatability.dat", repeat_data.str());
   WriteFile(dir / "errors.dat", hist_data.str());
   std::ostringstream titles;
   const std::size_t n = result.methods.size();
@@ -468,20 +472,30 @@ void WriteFeatureEvalReport(const FeatureEvalResult& result, const fs::path& dir
                 "set ylabel 'matches'\nset logscale y\nset title 'Error of judged matches "
                 "(all pairs)'\n" +
                 per_method("errors.dat", "steps lw 2") + "\n");
-  std::ostringstream rate_plot;
-  rate_plot << head
-            << "set output 'correct_rate.png'\nset style data histograms\n"
-               "set style histogram clustered gap 1\nset style fill solid 0.8 border -1\n"
-               "set yrange [0:1]\nset ylabel 'correct-match rate'\nset xtics rotate by -30\n"
-               "set title 'Correct-match rate (frame i vs i+gap)'\nplot ";
-  for (std::size_t t = 0; t < result.taus.size(); ++t) {
-    rate_plot << (t ? ", " : "") << "'correct_rate.dat' using " << t + 2
-              << (t == 0 ? ":xtic(1)" : "") << " title 'τ = " << Tau(result.taus[t]) << " px"
-              << (t == d ? " (default)" : "") << "'";
-  }
-  rate_plot << "\n";
-  WriteFile(dir / "correct_rate.gp", rate_plot.str());
-  for (const char* script : {"counts.gp", "counts_mean10.gp", "errors.gp", "correct_rate.gp"}) {
+  // Methods along x, one bar per tau.
+  // The bar of tau `marked` is labelled `mark` (the one summary.md reports).
+  auto bars_per_tau = [&](const std::string& name, const std::string& ylabel,
+                          const std::string& title, std::size_t marked, const std::string& mark) {
+    std::ostringstream plot;
+    plot << head << "set output '" << name
+         << ".png'\nset style data histograms\n"
+            "set style histogram clustered gap 1\nset style fill solid 0.8 border -1\n"
+            "set yrange [0:1]\nset ylabel '"
+         << ylabel << "'\nset xtics rotate by -30\nset title '" << title << "'\nplot ";
+    for (std::size_t t = 0; t < result.taus.size(); ++t) {
+      plot << (t ? ", " : "") << "'" << name << ".dat' using " << t + 2
+           << (t == 0 ? ":xtic(1)" : "") << " title 'τ = " << Tau(result.taus[t]) << " px"
+           << (t == marked ? " (" + mark + ")" : "") << "'";
+    }
+    WriteFile(dir / (name + ".gp"), plot.str() + "\n");
+  };
+  bars_per_tau("correct_rate", "correct-match rate", "Correct-match rate (frame i vs i+gap)", d,
+               "default");
+  bars_per_tau("repeatability", "share of the points found again",
+               "Repeatability: points of frame i that frame i+gap detected again", 0,
+               "in summary.md");
+  for (const char* script :
+       {"counts.gp", "counts_mean10.gp", "errors.gp", "correct_rate.gp", "repeatability.gp"}) {
     RunGnuplot(dir / script);
   }
 }

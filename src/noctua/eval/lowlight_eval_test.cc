@@ -67,9 +67,10 @@ TEST(EvaluateFeatures, EnhancedMethodsBeatOrbOnFr1DarkenedTo8PercentAndReport) {
   EXPECT_GT(run.correct[1], run.correct[0]);
   EXPECT_GT(run.correct[2], run.correct[0]);
   EXPECT_GT(run.correct[0], 0);
-  for (const char* file : {"counts.csv", "counts_mean10.csv", "pairs.csv", "summary.md",
-                           "summary.json", "counts.png", "counts_mean10.png", "correct_rate.png",
-                           "errors.png", "matches_orb.png", "matches_paper.png"}) {
+  for (const char* file :
+       {"counts.csv", "counts_mean10.csv", "pairs.csv", "summary.md", "summary.json", "counts.png",
+        "counts_mean10.png", "correct_rate.png", "repeatability.png", "errors.png",
+        "matches_orb.png", "matches_paper.png"}) {
     EXPECT_TRUE(fs::is_regular_file(out / file)) << file;
   }
   fs::remove_all(out);
