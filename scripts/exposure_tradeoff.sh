@@ -87,10 +87,11 @@ normal=$(for scale in 1 0.98 0.96; do jq '.ate.translation_m.rmse' "$out/slam/no
   awk '{ s += $1 } END { printf "%.5f", s / NR }')
 
 csv=$out/runs_$method.csv
-echo "sensor,exposure_ms,level,seed,method,ate_rmse_m,lost_frames" >"$csv"
+# Frames without a pose include those before the map starts (the report's lost_frames does not).
+echo "sensor,exposure_ms,level,seed,method,ate_rmse_m,frames_without_pose" >"$csv"
 while read -r sensor exposure case_level seed; do
   jq -r --arg s "$sensor" --arg e "$exposure" --arg l "$case_level" --arg k "$seed" \
-    --arg m "$method" '[$s, $e, $l, $k, $m, (.ate.translation_m.rmse // "nan"), .lost_frames] |
+    --arg m "$method" '[$s, $e, $l, $k, $m, (.ate.translation_m.rmse // "nan"), .frames - .tracked_frames] |
       @csv' "$out/slam/${sensor}_${exposure}ms_s${seed}_$method/report.json" | tr -d '"' >>"$csv"
 done <"$cases"
 

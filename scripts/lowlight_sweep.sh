@@ -4,7 +4,7 @@
 # made by `noctua simulate --sensor MODEL --level L --seed K` (noise, fixed pattern, the model's
 # longer exposure blurred along the ground-truth motion); each is run through `noctua slam` (ATE
 # RMSE, frames without a pose) and `noctua eval` (correct matches per pair: frame i vs i+5, every
-# 5th pair, tau 10 px). 100 % is the recorded frames, the same for every model: its runs are the
+# 5th pair, tau 10 px; repeatability: the share of points found again within 3 px). 100 % is the recorded frames, the same for every model: its runs are the
 # frames scaled by 1, 0.98 and 0.96 (`--brightness`, the noiseless model), since a SLAM run on the
 # same frames repeats itself and one run scatters (docs/slam.md).
 # Writes OUT/runs.csv (one line per SLAM run), OUT/sweep.md (mean, min-max over seeds), and
@@ -112,26 +112,32 @@ done <"$cases" | xargs -P "$jobs" -L 1 bash -c 'slam_one "$@"' _
 xargs -P "$jobs" -L 1 bash -c 'eval_one "$@"' _ <"$cases"
 
 csv=$out/runs.csv
-echo "sensor,level,seed,method,ate_rmse_m,lost_frames,frames,correct_matches_per_pair" >"$csv"
+# Frames without a pose: the frames before the map starts count too (a method that never starts
+# one has none with a pose), where the report's lost_frames counts only those after it.
+echo "sensor,level,seed,method,ate_rmse_m,frames_without_pose,frames,correct_matches_per_pair,repeatability_3px" >"$csv"
 while read -r sensor level seed; do
   summary=$out/eval/${sensor}_${level}_s$seed/summary.json
   [ "$level" = 100 ] && summary=$out/eval/-_100_s$first_seed/summary.json
   for method in $methods; do
     correct=$(jq -r --arg m "$method" '(.taus | index(10)) as $i |
       .methods[] | select(.method == $m) | .mean_correct[$i]' "$summary")
+    repeated=$(jq -r --arg m "$method" '(.taus | index(3)) as $i |
+      .methods[] | select(.method == $m) | .repeatability[$i]' "$summary")
     jq -r --arg s "$sensor" --arg l "$level" --arg k "$seed" --arg m "$method" --arg c "$correct" \
-      '[$s, $l, $k, $m, (.ate.translation_m.rmse // "nan"), .lost_frames, .frames, $c] | @csv' \
+      --arg r "$repeated" \
+      '[$s, $l, $k, $m, (.ate.translation_m.rmse // "nan"), .frames - .tracked_frames, .frames, $c,
+        $r] | @csv' \
       "$out/slam/${sensor}_${level}_s${seed}_$method/report.json" | tr -d '"' >>"$csv"
   done
 done <"$cases"
 
 # Mean, min and max over seeds per (model, level, method); 100 % is listed once, as model "-".
 {
-  echo "| model | light | method | ATE RMSE m, mean (min–max) | frames without a pose (per run) | correct matches per pair (τ 10 px) |"
-  echo "|---|---:|---|---|---|---:|"
+  echo "| model | light | method | ATE RMSE m, mean (min–max) | frames without a pose (per run) | correct matches per pair (τ 10 px) | repeatability (3 px) |"
+  echo "|---|---:|---|---|---|---:|---:|"
   awk -F, 'NR > 1 {
       key = $1 "|" $2 "|" $4; if (!(key in n)) order[++k] = key
-      n[key]++; sum[key] += $5; corr[key] += $8
+      n[key]++; sum[key] += $5; corr[key] += $8; rep[key] += $9
       if (!(key in lo) || $5 < lo[key]) lo[key] = $5
       if (!(key in hi) || $5 > hi[key]) hi[key] = $5
       lost[key] = lost[key] (lost[key] == "" ? "" : "/") $6
@@ -139,8 +145,9 @@ done <"$cases"
     END {
       for (i = 1; i <= k; i++) {
         key = order[i]; split(key, part, "|")
-        printf "| %s | %s %% | %s | %.4f (%.4f–%.4f) | %s | %.0f |\n", part[1], part[2], part[3],
-               sum[key] / n[key], lo[key], hi[key], lost[key], corr[key] / n[key]
+        printf "| %s | %s %% | %s | %.4f (%.4f–%.4f) | %s | %.0f | %.3f |\n", part[1], part[2],
+               part[3], sum[key] / n[key], lo[key], hi[key], lost[key], corr[key] / n[key],
+               rep[key] / n[key]
       }
     }' "$csv"
 } >"$out/sweep.md"
