@@ -106,6 +106,7 @@ void ReadSlamSection(const YAML::Node& root, const std::string& source, SlamOpti
                                                "triangulation_covisibles",
                                                "max_depth_m",
                                                "max_coasting_frames",
+                                               "min_initial_points",
                                                "min_tracked_inliers",
                                                "min_inliers_after_relocalisation",
                                                "certain_sigma_ratio",
@@ -130,6 +131,7 @@ void ReadSlamSection(const YAML::Node& root, const std::string& source, SlamOpti
   io::ReadSetting(section, "triangulation_covisibles", source, options.triangulation.covisibles);
   io::ReadSetting(section, "max_depth_m", source, options.max_depth_m);
   io::ReadSetting(section, "max_coasting_frames", source, options.max_coasting_frames);
+  io::ReadSetting(section, "min_initial_points", source, options.min_initial_points);
   io::ReadSetting(section, "min_tracked_inliers", source, options.min_tracked_inliers);
   io::ReadSetting(section, "min_inliers_after_relocalisation", source,
                   options.min_inliers_after_relocalisation);

@@ -92,6 +92,11 @@ TrackResult Tracker::Track(Frame frame) {
   if (state_ == TrackingState::kNotInitialised) {
     // With moving points rejected, the map starts once they can be told apart.
     ok = (!options_.reject_moving_points || current_->moving_known) && Initialise(*current_);
+    if (ok) {
+      PoseFramesBeforeMap(*last_keyframe_);
+    } else {
+      KeepUntilTheMapStarts(*current_);
+    }
     result.state = ok ? TrackingState::kOk : TrackingState::kNotInitialised;
     result.method = ok ? "init" : "";
     result.new_keyframe = ok;
@@ -362,6 +367,47 @@ bool Tracker::Initialise(Frame& frame) {
   return true;
 }
 
+void Tracker::KeepUntilTheMapStarts(const Frame& frame) {
+  // Its record is the next one (Track pushes it after this).
+  frames_before_map_.push_back({records_.size(), frame});
+  if (frames_before_map_.size() > kMaxFramesBeforeMap) frames_before_map_.pop_front();
+}
+
+void Tracker::PoseFramesBeforeMap(const KeyFrame& first) {
+  // From the first keyframe's matches, with outliers and moving points dropped: the inliers.
+  const auto optimise = [&](Frame& frame, std::vector<MapPoint*> matches) {
+    for (std::size_t i = 0; i < matches.size(); ++i) {
+      if (frame.moving[i]) matches[i] = nullptr;
+    }
+    frame.map_points = std::move(matches);
+    frame.outlier.assign(frame.map_points.size(), false);
+    frame.pose_cw = first.pose_cw();
+    return OptimizePose(frame, pyramid_, options_.bf);
+  };
+  for (auto& [record, frame] : frames_before_map_) {
+    std::vector<MapPoint*> matches;
+    int inliers = 0;
+    if (strict_matcher_.SearchByDescriptor(first, frame, matches) >= kMinReferenceMatches) {
+      inliers = optimise(frame, std::move(matches));
+    }
+    if (inliers < options_.min_tracked_inliers) {
+      // As for the first frame after the start: in the dark, descriptors alone can leave too
+      // few matches, and the frames just before barely moved, so they are searched by position.
+      Frame around_first = frame;
+      around_first.map_points.assign(around_first.map_points.size(), nullptr);
+      around_first.pose_cw = first.pose_cw();
+      matcher_.SearchByProjection(around_first, first, {}, kStillRadiusPx, Matcher::kThresholdHigh);
+      inliers = optimise(frame, around_first.map_points);
+    }
+    if (inliers < options_.min_tracked_inliers) continue;
+    FrameRecord& posed = records_[record];
+    posed.reference = &first;
+    posed.pose_c_r = frame.pose_cw * first.pose_cw().inverse();
+    posed.position_sigma_m = EstimatePoseUncertainty(frame, pyramid_, options_.bf).position_sigma_m;
+  }
+  frames_before_map_.clear();
+}
+
 void Tracker::UpdateLastFrame() {
   // The last frame's pose follows later refinement of its reference keyframe.
   const FrameRecord& record = records_.back();
@@ -462,7 +508,9 @@ bool Tracker::TrackReferenceKeyFrame() {
   Frame& frame = *current_;
   if (reference_ == nullptr || reference_->bad()) reference_ = last_keyframe_;
   std::vector<MapPoint*> matches;
-  if (strict_matcher_.SearchByDescriptor(*reference_, frame, matches) < 15) return false;
+  if (strict_matcher_.SearchByDescriptor(*reference_, frame, matches) < kMinReferenceMatches) {
+    return false;
+  }
   frame.map_points = matches;
   RejectMovingMatches(false);
   frame.pose_cw = last_->pose_cw;

@@ -176,6 +176,13 @@ class Tracker {
   // the two (`motion`: T_current_first, over `dt` seconds).
   void CorrectFirstKeyFrame(const geometry::Pose& motion, double dt);
   bool Coast(TrackResult& result);
+  // A frame with too few points with depth to start the map (a dark start) is kept, and gets a
+  // pose once the map starts: matched by descriptor against the first keyframe, its pose
+  // optimised from there (the frames just before barely moved), and kept when it rests on as
+  // many inliers as tracking asks of any frame (min_tracked_inliers). Its record is filled in;
+  // its TrackResult, already returned, stays kNotInitialised.
+  void KeepUntilTheMapStarts(const Frame& frame);
+  void PoseFramesBeforeMap(const KeyFrame& first);
   void CreateNewKeyFrame();
   // Maps a new keyframe: all at once, or queued for AdvanceMapping (SlamOptions::
   // mapping_slice_ms), the oldest finished first when too many wait.
@@ -240,6 +247,17 @@ class Tracker {
   // Live for one frame: visual odometry of the last frame, lifted keyframe depth (localising).
   std::vector<std::unique_ptr<MapPoint>> temporary_points_;
   std::vector<FrameRecord> records_;
+  // KeepUntilTheMapStarts: a second of frames at 30 Hz. Matching an older frame against the
+  // first keyframe would rarely hold, and the buffer must not grow while no map starts.
+  static constexpr std::size_t kMaxFramesBeforeMap = 30;
+  // Descriptor matches against a keyframe needed before a pose is optimised from them
+  // (TrackReferenceKeyFrame, PoseFramesBeforeMap), ORB-SLAM's.
+  static constexpr int kMinReferenceMatches = 15;
+  struct FrameBeforeMap {
+    std::size_t record;  // in records_
+    Frame frame;
+  };
+  std::deque<FrameBeforeMap> frames_before_map_;
   struct UnrefinedFrame {
     std::size_t record;     // in records_
     long keyframes_before;  // keyframes_made_ when it was tracked
