@@ -163,10 +163,7 @@ Repeatability MeasureRepeatability(const std::vector<cv::KeyPoint>& keypoints_i,
     if (MaskAt(geometry.dynamic_i, points_i[k])) continue;
     const std::optional<Eigen::Vector2d> at =
         LandingInJ(points_i[k], undistorted_i[k], geometry).at;
-    if (!at || at->x() < border_px || at->y() < border_px || at->x() > size.width - 1 - border_px ||
-        at->y() > size.height - 1 - border_px) {
-      continue;
-    }
+    if (!at || !InsideBorder(*at, size, border_px)) continue;
     if (MaskAt(geometry.dynamic_j,
                cv::Point2f(static_cast<float>(at->x()), static_cast<float>(at->y())))) {
       continue;

@@ -60,6 +60,12 @@ class PointGrid {
   std::vector<std::vector<cv::Point2f>> cells_;
 };
 
+// Whether `at` lies at least `border_px` inside an image of `size` (where detectors keep points).
+inline bool InsideBorder(const Eigen::Vector2d& at, cv::Size size, double border_px) {
+  return at.x() >= border_px && at.y() >= border_px && at.x() <= size.width - 1 - border_px &&
+         at.y() <= size.height - 1 - border_px;
+}
+
 // How many of frame i's points frame j detected again, whatever their descriptors say: the share
 // separates what the detector loses (a corner not found again where it should be) from what the
 // descriptor loses (a corner found again but not matched).

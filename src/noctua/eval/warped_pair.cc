@@ -41,14 +41,11 @@ void CountRepeated(const std::vector<cv::KeyPoint>& in_photo,
   std::vector<cv::Point2f> moved;
   cv::transform(points, moved, affine);
   const PointGrid grid(in_copy, size, within_px);
-  const auto border = static_cast<float>(features::kEdgeThreshold);
-  for (const cv::Point2f& at : moved) {
-    if (at.x < border || at.y < border || at.x > static_cast<float>(size.width - 1) - border ||
-        at.y > static_cast<float>(size.height - 1) - border) {
-      continue;
-    }
+  for (const cv::Point2f& moved_point : moved) {
+    const Eigen::Vector2d at(moved_point.x, moved_point.y);
+    if (!InsideBorder(at, size, features::kEdgeThreshold)) continue;
     ++result.comparable;
-    if (grid.NearestDistance(Eigen::Vector2d(at.x, at.y)) <= within_px) ++result.repeated;
+    if (grid.NearestDistance(at) <= within_px) ++result.repeated;
   }
 }
 

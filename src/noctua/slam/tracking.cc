@@ -393,11 +393,10 @@ void Tracker::PoseFramesBeforeMap(const KeyFrame& first) {
     if (inliers < options_.min_tracked_inliers) {
       // As for the first frame after the start: in the dark, descriptors alone can leave too
       // few matches, and the frames just before barely moved, so they are searched by position.
-      Frame around_first = frame;
-      around_first.map_points.assign(around_first.map_points.size(), nullptr);
-      around_first.pose_cw = first.pose_cw();
-      matcher_.SearchByProjection(around_first, first, {}, kStillRadiusPx, Matcher::kThresholdHigh);
-      inliers = optimise(frame, around_first.map_points);
+      frame.map_points.assign(frame.map_points.size(), nullptr);
+      frame.pose_cw = first.pose_cw();
+      matcher_.SearchByProjection(frame, first, {}, kStillRadiusPx, Matcher::kThresholdHigh);
+      inliers = optimise(frame, frame.map_points);
     }
     if (inliers < options_.min_tracked_inliers) continue;
     FrameRecord& posed = records_[record];
