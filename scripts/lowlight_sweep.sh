@@ -15,7 +15,9 @@
 # (0: all) override either mode; NOCTUA_JOBS runs that many commands at once (default 2).
 # NOCTUA_SCENE=crowd sweeps bonn_crowd_120 instead (real people walking around a hand-held Xtion,
 # config/bonn.yaml), its SLAM runs with YOLOv8n's dynamic regions: the held-out check of the
-# same methods and models where people cover the view.
+# same methods and models where people cover the view. NOCTUA_REJECT_MOVING=1 adds the model-free
+# test of moving points to every SLAM run (`slam --reject-moving-points`; with the crowd's
+# detector: "both", docs/slam.md).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 out=${1:-lowlight-sweep}
@@ -24,6 +26,7 @@ noctua=${NOCTUA_BIN:-$root/build/noctua}
 jobs=${NOCTUA_JOBS:-2}
 scene=${NOCTUA_SCENE:-fr1}
 detector=""
+reject_moving=${NOCTUA_REJECT_MOVING:-0}
 case $scene in
   fr1) dataset=$shared/data/tum_fr1_rpy_200 config=$root/config/tum_fr1.yaml ;;
   crowd)
@@ -85,6 +88,7 @@ slam_one() {
   fi
   echo "lowlight_sweep: slam $method $sensor $level% seed $seed" >&2
   [ -z "$detector" ] || args+=(--detector "$detector")
+  [ "$reject_moving" != 1 ] || args+=(--reject-moving-points)
   "$noctua" slam "${args[@]}" --config "$config" --method "$method" --max-frames "$frames" \
     --out "$dir" --force --progress-every 100000 --deterministic >/dev/null 2>"$dir.log" ||
     { echo "lowlight_sweep: $dir failed" >&2; return 1; }
@@ -103,7 +107,7 @@ eval_one() {
     { echo "lowlight_sweep: $dir failed" >&2; return 1; }
 }
 export -f simulate_one slam_one eval_one
-export out dataset config detector noctua frames methods
+export out dataset config detector reject_moving noctua frames methods
 export first_seed=$1
 xargs -P "$jobs" -L 1 bash -c 'simulate_one "$@"' _ <"$cases"
 while read -r sensor level seed; do
@@ -133,6 +137,13 @@ done <"$cases"
 
 # Mean, min and max over seeds per (model, level, method); 100 % is listed once, as model "-".
 {
+  moving=none
+  [ -z "$detector" ] || moving="the regions of YOLOv8n"
+  if [ "$reject_moving" = 1 ]; then
+    if [ -z "$detector" ]; then moving="the model-free test"; else moving="$moving and the model-free test"; fi
+  fi
+  echo "$(basename "$dataset"), moving points: $moving."
+  echo
   echo "| model | light | method | ATE RMSE m, mean (min–max) | frames without a pose (per run) | correct matches per pair (τ 10 px) | repeatability (3 px) |"
   echo "|---|---:|---|---|---|---:|---:|"
   awk -F, 'NR > 1 {
