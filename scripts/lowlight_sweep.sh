@@ -27,6 +27,9 @@ jobs=${NOCTUA_JOBS:-2}
 scene=${NOCTUA_SCENE:-fr1}
 detector=""
 reject_moving=${NOCTUA_REJECT_MOVING:-0}
+# Runs are reused when OUT is run again: each mode keeps its own, so switching never mixes them.
+slam_runs=$out/slam
+[ "$reject_moving" != 1 ] || slam_runs=$out/slam-reject-moving
 case $scene in
   fr1) dataset=$shared/data/tum_fr1_rpy_200 config=$root/config/tum_fr1.yaml ;;
   crowd)
@@ -55,7 +58,7 @@ sensors=${NOCTUA_SENSORS:-${d_sensors:-$all_sensors}}
 # shellcheck disable=SC2086 # split on purpose
 set -- $seeds
 [ $# -le 3 ] || { echo "lowlight_sweep: at most 3 seeds (100 % has three scalings)" >&2; exit 1; }
-mkdir -p "$out/seq" "$out/slam" "$out/eval"
+mkdir -p "$out/seq" "$slam_runs" "$out/eval"
 
 # One line per case: sensor level seed (100 %: sensor "-", the seed picks the scaling).
 cases=$out/cases.txt
@@ -78,7 +81,7 @@ simulate_one() {
 
 slam_one() {
   local sensor=$1 level=$2 seed=$3 method=$4
-  local dir=$out/slam/${sensor}_${level}_s${seed}_$method args
+  local dir=$slam_runs/${sensor}_${level}_s${seed}_$method args
   [ -e "$dir/report.json" ] && return 0
   if [ "$level" = 100 ]; then
     local scale=(1 0.98 0.96)
@@ -107,7 +110,7 @@ eval_one() {
     { echo "lowlight_sweep: $dir failed" >&2; return 1; }
 }
 export -f simulate_one slam_one eval_one
-export out dataset config detector reject_moving noctua frames methods
+export out slam_runs dataset config detector reject_moving noctua frames methods
 export first_seed=$1
 xargs -P "$jobs" -L 1 bash -c 'simulate_one "$@"' _ <"$cases"
 while read -r sensor level seed; do
@@ -131,18 +134,18 @@ while read -r sensor level seed; do
       --arg r "$repeated" \
       '[$s, $l, $k, $m, (.ate.translation_m.rmse // "nan"), .frames - .tracked_frames, .frames, $c,
         $r] | @csv' \
-      "$out/slam/${sensor}_${level}_s${seed}_$method/report.json" | tr -d '"' >>"$csv"
+      "$slam_runs/${sensor}_${level}_s${seed}_$method/report.json" | tr -d '"' >>"$csv"
   done
 done <"$cases"
 
 # Mean, min and max over seeds per (model, level, method); 100 % is listed once, as model "-".
 {
-  moving=none
-  [ -z "$detector" ] || moving="the regions of YOLOv8n"
-  if [ "$reject_moving" = 1 ]; then
-    if [ -z "$detector" ]; then moving="the model-free test"; else moving="$moving and the model-free test"; fi
-  fi
-  echo "$(basename "$dataset"), moving points: $moving."
+  moving=()
+  [ -z "$detector" ] || moving+=("YOLOv8n's regions")
+  [ "$reject_moving" != 1 ] || moving+=("the model-free test")
+  [ ${#moving[@]} -gt 0 ] || moving=(none)
+  joined=$(IFS='|' && echo "${moving[*]}")
+  echo "$(basename "$dataset"), moving points: ${joined//|/ and }."
   echo
   echo "| model | light | method | ATE RMSE m, mean (min–max) | frames without a pose (per run) | correct matches per pair (τ 10 px) | repeatability (3 px) |"
   echo "|---|---:|---|---|---|---:|---:|"
