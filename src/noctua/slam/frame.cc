@@ -16,6 +16,33 @@ ScalePyramid::ScalePyramid(double scale_factor, int levels)
   }
 }
 
+namespace {
+
+// The depth-edge test's neighbourhood, (2 r + 1)^2 pixels around a keypoint, and how far a
+// neighbour may lie from the keypoint's depth, in sigmas of the sensor's noise there
+// (geometry::DepthNoiseSigma): a neighbour on the same surface stays within it.
+constexpr int kDepthEdgeRadiusPx = 2;
+constexpr double kDepthEdgeSigmas = 4.0;
+
+bool OnDepthEdgeAt(const cv::Mat& depth_m, int u, int v, double min_depth_m) {
+  const float own = depth_m.at<float>(v, u);
+  if (!std::isfinite(own) || own < min_depth_m) return false;  // no depth: nothing to judge
+  const double tolerance = kDepthEdgeSigmas * geometry::DepthNoiseSigma(own);
+  for (int y = std::max(0, v - kDepthEdgeRadiusPx);
+       y <= std::min(depth_m.rows - 1, v + kDepthEdgeRadiusPx); ++y) {
+    for (int x = std::max(0, u - kDepthEdgeRadiusPx);
+         x <= std::min(depth_m.cols - 1, u + kDepthEdgeRadiusPx); ++x) {
+      const float value = depth_m.at<float>(y, x);
+      if (!std::isfinite(value) || value < min_depth_m || std::abs(value - own) > tolerance) {
+        return true;
+      }
+    }
+  }
+  return false;
+}
+
+}  // namespace
+
 FrameFeatures::FrameFeatures(std::vector<cv::KeyPoint> keypoints, cv::Mat descriptors,
                              const cv::Mat& depth_m, const geometry::PinholeCamera& camera,
                              double bf, double min_depth_m)
@@ -27,11 +54,14 @@ FrameFeatures::FrameFeatures(std::vector<cv::KeyPoint> keypoints, cv::Mat descri
     const int u = static_cast<int>(std::lround(keypoints_[i].pt.x));
     const int v = static_cast<int>(std::lround(keypoints_[i].pt.y));
     double depth = 0.0;
+    bool on_edge = false;
     if (u >= 0 && v >= 0 && u < depth_m.cols && v < depth_m.rows) {
       const float value = depth_m.at<float>(v, u);
       if (std::isfinite(value) && value >= min_depth_m) depth = value;
+      on_edge = OnDepthEdgeAt(depth_m, u, v, min_depth_m);
     }
     depth_.push_back(depth);
+    on_depth_edge_.push_back(on_edge);
     right_u_.push_back(depth > 0.0 ? undistorted_[i].x() - bf / depth : -1.0);
   }
   BuildGrid();
@@ -40,16 +70,23 @@ FrameFeatures::FrameFeatures(std::vector<cv::KeyPoint> keypoints, cv::Mat descri
 FrameFeatures::FrameFeatures(std::vector<cv::KeyPoint> keypoints, cv::Mat descriptors,
                              std::vector<double> depth, std::vector<double> right_u,
                              const geometry::PinholeCamera& camera,
-                             std::vector<Eigen::Vector2d> undistorted)
+                             std::vector<Eigen::Vector2d> undistorted,
+                             std::vector<bool> on_depth_edge)
     : keypoints_(std::move(keypoints)),
       undistorted_(std::move(undistorted)),
       depth_(std::move(depth)),
       right_u_(std::move(right_u)),
+      on_depth_edge_(std::move(on_depth_edge)),
       descriptors_(std::move(descriptors)),
       camera_(camera) {
   CheckDescriptors();
   if (depth_.size() != keypoints_.size() || right_u_.size() != keypoints_.size()) {
     throw Error("SLAM features need one depth and one right coordinate per keypoint");
+  }
+  if (on_depth_edge_.empty()) {
+    on_depth_edge_.assign(keypoints_.size(), false);
+  } else if (on_depth_edge_.size() != keypoints_.size()) {
+    throw Error("SLAM features need one depth-edge flag per keypoint");
   }
   if (undistorted_.empty()) {
     Undistort();
@@ -80,7 +117,7 @@ FrameFeatures FrameFeatures::AtMiddleRow(const Eigen::Vector3d& rotation_per_s,
   // The restoring constructor builds the grid once for the moved positions (a copy of *this
   // would copy the old grid only to rebuild it).
   return FrameFeatures(keypoints_, descriptors_, depth_, std::move(right_u), camera_,
-                       std::move(undistorted));
+                       std::move(undistorted), on_depth_edge_);
 }
 
 void FrameFeatures::CheckDescriptors() const {

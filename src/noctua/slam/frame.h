@@ -27,15 +27,18 @@ struct ScalePyramid {
 class FrameFeatures {
  public:
   // `depth_m` is CV_32F metres registered to the colour image (0 = none), read at each keypoint's
-  // detected position; keypoints outside any depth get depth 0.
+  // detected position; keypoints outside any depth get depth 0. A keypoint is also marked when it
+  // lies on a depth edge (OnDepthEdge).
   FrameFeatures(std::vector<cv::KeyPoint> keypoints, cv::Mat descriptors, const cv::Mat& depth_m,
                 const geometry::PinholeCamera& camera, double bf, double min_depth_m);
   // Features restored from a saved map (map_io.h): depth, right coordinate and undistorted
   // position per keypoint as the map had them (AtMiddleRow may have moved the positions; empty
-  // `undistorted`: derived from the keypoints again); the grid is built again.
+  // `undistorted`: derived from the keypoints again); the grid is built again. Without
+  // `on_depth_edge` (a map keeps no depth image) no keypoint is on a depth edge.
   FrameFeatures(std::vector<cv::KeyPoint> keypoints, cv::Mat descriptors, std::vector<double> depth,
                 std::vector<double> right_u, const geometry::PinholeCamera& camera,
-                std::vector<Eigen::Vector2d> undistorted = {});
+                std::vector<Eigen::Vector2d> undistorted = {},
+                std::vector<bool> on_depth_edge = {});
 
   int size() const { return static_cast<int>(keypoints_.size()); }
   const cv::KeyPoint& keypoint(int i) const { return keypoints_[static_cast<std::size_t>(i)]; }
@@ -45,6 +48,11 @@ class FrameFeatures {
   }
   double depth(int i) const { return depth_[static_cast<std::size_t>(i)]; }      // 0: none
   double right_u(int i) const { return right_u_[static_cast<std::size_t>(i)]; }  // with depth only
+  // Whether the depth around keypoint i jumps: a hole, or a value more than a few sigmas of the
+  // sensor's noise from the keypoint's own, within a few pixels. A corner is often where the depth
+  // jumps, and there the sensor reads the near side in one frame and the far side (or nothing) in
+  // the next, so the keypoint's depth is no steady measurement of one surface.
+  bool OnDepthEdge(int i) const { return on_depth_edge_[static_cast<std::size_t>(i)]; }
   const uchar* descriptor(int i) const { return descriptors_.ptr<uchar>(i); }
   const cv::Mat& descriptors() const { return descriptors_; }
   const geometry::PinholeCamera& camera() const { return camera_; }
@@ -87,6 +95,7 @@ class FrameFeatures {
   std::vector<Eigen::Vector2d> undistorted_;
   std::vector<double> depth_;
   std::vector<double> right_u_;
+  std::vector<bool> on_depth_edge_;
   cv::Mat descriptors_;
   geometry::PinholeCamera camera_;
   double min_x_ = 0, max_x_ = 0, min_y_ = 0, max_y_ = 0;

@@ -28,6 +28,42 @@ FrameFeatures ThreeRowsAndOneWithoutDepth() {
   return FrameFeatures(keypoints, descriptors, depth, right_u, testing::TestCamera());
 }
 
+// A box 1 m away in front of a wall 2.5 m away, its left side at x = 300, with a hole in the wall
+// at (100, 100) and a speckle of sensor noise (+2 mm, well within 4 sigmas) around (400, 300).
+// Keypoints on the box's edge, next to it on the wall, and next to the hole are on depth edges;
+// those a few pixels off either side of the edge, in the speckle and far from all are not.
+TEST(FrameFeatures, MarksKeypointsWhereTheDepthJumpsOrHasAHole) {
+  cv::Mat depth(480, 640, CV_32F, cv::Scalar(2.5f));
+  depth(cv::Rect(300, 0, 340, 480)).setTo(1.0f);
+  depth.at<float>(100, 100) = 0.0f;
+  depth(cv::Rect(399, 299, 3, 3)).setTo(1.002f);
+  const std::vector<std::pair<cv::Point2f, bool>> cases = {
+      {{300.0f, 240.0f}, true},   // on the box, its edge within the neighbourhood
+      {{298.0f, 240.0f}, true},   // on the wall, the box two pixels away
+      {{297.0f, 240.0f}, false},  // on the wall, three pixels from the box
+      {{303.0f, 240.0f}, false},  // on the box, three pixels in
+      {{102.0f, 101.0f}, true},   // the hole within two pixels
+      {{103.0f, 100.0f}, false}, {{400.0f, 300.0f}, false},  // noise on one surface is no edge
+      {{0.0f, 0.0f}, false},      // the image's corner: the neighbourhood is cut, not a hole
+      {{100.0f, 100.0f}, false},  // in the hole: no depth, nothing to judge
+  };
+  std::vector<cv::KeyPoint> keypoints;
+  for (const auto& [point, edge] : cases) keypoints.emplace_back(point, 31.0f);
+  const cv::Mat descriptors(static_cast<int>(keypoints.size()), 32, CV_8U, cv::Scalar(0));
+  const FrameFeatures features(keypoints, descriptors, depth, testing::TestCamera(), kBf, 0.1);
+  for (std::size_t i = 0; i < cases.size(); ++i) {
+    EXPECT_EQ(features.OnDepthEdge(static_cast<int>(i)), cases[i].second)
+        << "keypoint at " << cases[i].first;
+  }
+  EXPECT_EQ(features.depth(8), 0.0);
+  // The flags survive moving to the middle row; features restored without them have none.
+  const FrameFeatures moved = features.AtMiddleRow({0.0, 1.0, 0.0}, {0.0, 0.0, 0.0}, kReadoutS);
+  for (int i = 0; i < features.size(); ++i)
+    EXPECT_EQ(moved.OnDepthEdge(i), features.OnDepthEdge(i));
+  const FrameFeatures restored = ThreeRowsAndOneWithoutDepth();
+  for (int i = 0; i < restored.size(); ++i) EXPECT_FALSE(restored.OnDepthEdge(i));
+}
+
 // Row y is read (y / 480 - 1/2) * readout after the middle row.
 double RowTime(double y) { return (y / 480.0 - 0.5) * kReadoutS; }
 
