@@ -152,7 +152,8 @@ void AddSlamCommand(CLI::App& app) {
       ->excludes(detect_every);
   command->add_flag("--reject-moving-points", args->run.reject_moving_points,
                     "Keep points that move against the static world out of tracking and mapping, "
-                    "found from geometry alone (no detector needed; docs/slam.md, Moving points)");
+                    "found from geometry alone (no detector needed; with --detector, a stricter "
+                    "test that skips depth edges; docs/slam.md, Moving points)");
   command->add_flag("--deterministic", args->run.deterministic,
                     "Run the local bundle adjustment in line instead of on its own thread, and "
                     "map each keyframe when it is made: the same result every run, at the cost "

@@ -35,6 +35,9 @@ nlohmann::json RunJson(const SlamRunOptions& options, const SlamRunReport& repor
   json["sensor"] = options.sensor;
   json["seed"] = options.seed;
   json["reject_moving_points"] = options.reject_moving_points;
+  // With a detector the model-free test runs in its stricter mode (BehindDetector).
+  json["moving_points_behind_detector"] =
+      options.reject_moving_points && !config.detector_model.empty();
   json["no_loop_closing"] = options.no_loop_closing;
   json["deterministic"] = options.deterministic;
   json["mapping_slice_ms"] = options.deterministic ? 0.0 : options.mapping_slice_ms;
@@ -218,6 +221,9 @@ SlamRunner::SlamRunner(const SlamRunOptions& options)
       source_(io::OpenFrameSource(SourceOptions(options, setup_))),
       config_(RunMethodConfig(options, *source_)),
       method_(pipeline::CreateMethod(options.method, config_)) {
+  if (!config_.detector_model.empty()) {
+    setup_.options.moving = slam::MotionSegmenterOptions::BehindDetector();
+  }
   if (!options_.load_map.empty()) {
     loaded_map_ = slam::LoadMap(options_.load_map, RunMapIdentity());
     loaded_keyframes_ = loaded_map_->NumKeyFrames();

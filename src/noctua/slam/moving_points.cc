@@ -152,12 +152,37 @@ void MovingRegion::Check() const {
   CheckOption(min_seeds >= 1, "slam: moving region min_seeds must be at least 1");
   CheckOption(min_moving_share >= 0.0 && min_moving_share <= 1.0,
               "slam: moving region min_moving_share must be in [0, 1]");
+  CheckOption(max_chance > 0.0 && max_chance <= 1.0,
+              "slam: moving region max_chance must be in (0, 1]");
+}
+
+MotionSegmenterOptions MotionSegmenterOptions::BehindDetector() {
+  MotionSegmenterOptions options;
+  options.skip_depth_edges = true;
+  options.region.max_chance = 0.01;
+  return options;
+}
+
+double BinomialTailAtLeast(int successes, int trials, double probability) {
+  if (successes <= 0) return 1.0;
+  if (successes > trials || probability <= 0.0) return 0.0;
+  if (probability >= 1.0) return 1.0;
+  const double log_p = std::log(probability);
+  const double log_q = std::log1p(-probability);
+  double tail = 0.0;
+  for (int k = successes; k <= trials; ++k) {
+    tail += std::exp(std::lgamma(trials + 1.0) - std::lgamma(k + 1.0) -
+                     std::lgamma(trials - k + 1.0) + k * log_p + (trials - k) * log_q);
+  }
+  return std::min(1.0, tail);
 }
 
 void GrowMovingRegions(const FrameFeatures& features, const MovingRegion& region,
                        const std::vector<bool>& judged, std::vector<bool>& moving) {
   region.Check();
   const std::vector<bool> seeds = moving;
+  const auto all_seeds = static_cast<int>(std::count(seeds.begin(), seeds.end(), true));
+  const auto all_judged = static_cast<int>(std::count(judged.begin(), judged.end(), true));
   const double fx = features.camera().fx();
   const double fy = features.camera().fy();
   std::vector<int> inside;
@@ -182,6 +207,14 @@ void GrowMovingRegions(const FrameFeatures& features, const MovingRegion& region
       if (judged[static_cast<std::size_t>(k)]) ++judged_inside;
     }
     if (seeds_inside < region.min_seeds || seeds_inside < region.min_moving_share * judged_inside) {
+      continue;
+    }
+    // The failure rate outside, with one failure and one pass added (Laplace's rule): a frame
+    // with few judged keypoints outside the region says little about how often static ones fail.
+    const double failure_rate =
+        (all_seeds - seeds_inside + 1.0) / (all_judged - judged_inside + 2.0);
+    if (region.max_chance < 1.0 &&
+        BinomialTailAtLeast(seeds_inside, judged_inside, failure_rate) > region.max_chance) {
       continue;
     }
     for (int k : inside) moving[static_cast<std::size_t>(k)] = true;
@@ -213,9 +246,11 @@ const FrameFeatures* MotionSegmenter::Reference(double timestamp) const {
 
 namespace {
 
-// Mutual best descriptor matches (query in `a`, train in `b`) of keypoints with depth in both.
+// Mutual best descriptor matches (query in `a`, train in `b`) of keypoints with depth in both,
+// and with `skip_depth_edges` on a depth edge in neither.
 std::vector<std::pair<int, int>> MatchWithDepth(const FrameFeatures& a, const FrameFeatures& b,
-                                                int max_distance, double ratio) {
+                                                int max_distance, double ratio,
+                                                bool skip_depth_edges) {
   std::vector<std::pair<int, int>> pairs;
   if (a.size() < 2 || b.size() < 2) return pairs;
   cv::BFMatcher matcher(cv::NORM_HAMMING);
@@ -230,7 +265,8 @@ std::vector<std::pair<int, int>> MatchWithDepth(const FrameFeatures& a, const Fr
     if (best.distance > static_cast<float>(max_distance) ||
         best.distance >= static_cast<float>(ratio) * knn[1].distance ||
         backward[static_cast<std::size_t>(best.trainIdx)].trainIdx != best.queryIdx ||
-        a.depth(best.queryIdx) <= 0.0 || b.depth(best.trainIdx) <= 0.0) {
+        a.depth(best.queryIdx) <= 0.0 || b.depth(best.trainIdx) <= 0.0 ||
+        (skip_depth_edges && (a.OnDepthEdge(best.queryIdx) || b.OnDepthEdge(best.trainIdx)))) {
       continue;
     }
     pairs.emplace_back(best.queryIdx, best.trainIdx);
@@ -264,8 +300,8 @@ MotionVerdicts MotionSegmenter::FlagMoving(std::shared_ptr<const FrameFeatures> 
   verdicts.whole_baseline =
       !history_.empty() && history_.front().first <= timestamp - options_.baseline_s;
   if (reference != nullptr) {
-    const auto matches =
-        MatchWithDepth(*features, *reference, options_.max_descriptor_distance, options_.ratio);
+    const auto matches = MatchWithDepth(*features, *reference, options_.max_descriptor_distance,
+                                        options_.ratio, options_.skip_depth_edges);
     std::vector<PointPair> pairs;
     for (const auto& [c, r] : matches) pairs.push_back(Lift(*reference, r, *features, c, scales_));
     const std::vector<bool> is_static = FindStaticPairs(pairs, options_.rigidity);

@@ -66,6 +66,14 @@ struct MovingRegion {
   // be moving. On a person most judged points move; where a fast turn blurs a static scene and
   // its lagging depth fails a scattered few of many judged points, the region stays.
   double min_moving_share = 1.0 / 3.0;
+  // ...and, below 1, its seeds must be more than the frame's failures elsewhere explain: at the
+  // rate at which the judged keypoints outside it fail, a static region of as many judged
+  // keypoints shows as many failures with at most this chance. A wrong match fails the test like
+  // a mover, and in the dark, where a few dozen keypoints match over the baseline and a quarter of
+  // them wrongly, a person-sized region on a near desk spans most of the frame and would take it
+  // all. Off (1) by default: in a crowd the other people fail outside the region as well, and the
+  // rate they give hides the one inside (MotionSegmenterOptions::BehindDetector).
+  double max_chance = 1.0;
 
   void Check() const;
 };
@@ -75,9 +83,14 @@ struct MovingRegion {
 // projected at the flagged one's depth) and at its depth, within half_depth_m plus three sigmas
 // of depth noise, belongs to the same object, when the region holds region.min_seeds flagged
 // keypoints and they are at least region.min_moving_share of those `judged` there (tested over
-// the baseline). Keypoints without depth are left as they are; only the flags set on entry grow.
+// the baseline), and more than chance given the failures outside it (max_chance). Keypoints
+// without depth are left as they are; only the flags set on entry grow.
 void GrowMovingRegions(const FrameFeatures& features, const MovingRegion& region,
                        const std::vector<bool>& judged, std::vector<bool>& moving);
+
+// The chance of at least `successes` in `trials` independent tries that each succeed with
+// `probability`: the binomial distribution's upper tail.
+double BinomialTailAtLeast(int successes, int trials, double probability);
 
 struct MotionSegmenterOptions {
   // How far back the frame lies against which each frame's points are checked. Over a third of a
@@ -91,8 +104,20 @@ struct MotionSegmenterOptions {
   double ratio = 0.8;
   RigidityOptions rigidity;
   MovingRegion region;
+  // Leave keypoints on a depth edge (FrameFeatures::OnDepthEdge) out of the test: their depth
+  // flips between the surfaces on either side from frame to frame, which the test takes for
+  // motion; on a static desk that turns fast a few such keypoints grow regions over most of the
+  // frame. But a person's outline is a depth edge too, and without a detector those keypoints are
+  // most of the evidence that a person moves. Off by default (BehindDetector).
+  bool skip_depth_edges = false;
 
   void Check() const;
+
+  // The settings for a run whose detector already masks the people: the test is then left with
+  // what the detector missed and with wrong matches, and its false alarms cost more than the
+  // outlines it would see, so it skips depth edges and grows a region only on more failures than
+  // chance (MovingRegion::max_chance). docs/slam.md, "The detector and the model-free test".
+  static MotionSegmenterOptions BehindDetector();
 };
 
 // What MotionSegmenter::FlagMoving found in one frame, one flag per keypoint.
@@ -110,7 +135,8 @@ struct MotionVerdicts {
 
 // Finds the keypoints of each frame that move against the static world, before the frame is
 // tracked: they are matched by descriptor to those of the frame baseline_s earlier, the pairs
-// with depth in both are sorted by FindStaticPairs, and the moving ones grow over their regions
+// with depth in both (and on a depth edge in neither, with skip_depth_edges) are sorted by
+// FindStaticPairs, and the moving ones grow over their regions
 // (GrowMovingRegions). Frames come in time order.
 class MotionSegmenter {
  public:

@@ -160,6 +160,58 @@ TEST(GrowMovingRegions, ThreeMovingPointsTakeThePersonButNotTheWall) {
   EXPECT_EQ(std::count(few.begin(), few.end(), true), 3);
 }
 
+// Known values: P(X >= 2) for 3 fair coins is 1/2; P(X >= 3) is 1/8; the whole range is 1.
+TEST(BinomialTailAtLeast, MatchesKnownValues) {
+  EXPECT_NEAR(BinomialTailAtLeast(2, 3, 0.5), 0.5, 1e-12);
+  EXPECT_NEAR(BinomialTailAtLeast(3, 3, 0.5), 0.125, 1e-12);
+  EXPECT_DOUBLE_EQ(BinomialTailAtLeast(0, 10, 0.3), 1.0);
+  EXPECT_DOUBLE_EQ(BinomialTailAtLeast(11, 10, 0.3), 0.0);
+  // 5 of 20 at p = 0.1: 1 - P(X <= 4) = 0.04317 (binomial table).
+  EXPECT_NEAR(BinomialTailAtLeast(5, 20, 0.1), 0.04317, 1e-5);
+}
+
+// Three moving keypoints on the chest, all that was judged on the person. Outside the person the
+// judged wall keypoints fail now rarely (a clear mover: the region grows), now as often (three
+// failures are no more than the frame's usual: with max_chance, it does not).
+TEST(GrowMovingRegions, WithMaxChanceGrowsOnlyOnMoreFailuresThanElsewhere) {
+  std::vector<int> on_person;
+  const FrameFeatures features = PersonInFrontOfAWall(on_person);
+  const std::size_t n = static_cast<std::size_t>(features.size());
+  std::vector<bool> on_person_flag(n, false);
+  for (int k : on_person) on_person_flag[static_cast<std::size_t>(k)] = true;
+  const int chest = on_person[on_person.size() / 3];
+  std::vector<bool> seeds(n, false);
+  for (int k : {chest - 1, chest, chest + 1}) seeds[static_cast<std::size_t>(k)] = true;
+  const auto grown_with = [&](int failing_wall_points, double max_chance) {
+    std::vector<bool> judged = seeds;
+    std::vector<bool> moving = seeds;
+    int judged_wall = 0, failing = 0;
+    for (std::size_t k = 0; k < n && judged_wall < 40; ++k) {
+      if (on_person_flag[k]) continue;
+      judged[k] = true;
+      ++judged_wall;
+      if (failing < failing_wall_points) {
+        moving[k] = true;
+        ++failing;
+      }
+    }
+    MovingRegion region;
+    region.max_chance = max_chance;
+    GrowMovingRegions(features, region, judged, moving);
+    int person_flagged = 0;
+    for (int k : on_person) person_flagged += moving[static_cast<std::size_t>(k)] ? 1 : 0;
+    return person_flagged;
+  };
+  const int person = static_cast<int>(on_person.size());
+  // One wall failure in 40: three of three on the chest are no chance (0.05^3).
+  EXPECT_GE(grown_with(1, 0.01), person * 3 / 4);
+  // Twenty in 40 (spread along the top rows, none three in a region of the person's depth): at a
+  // rate of one half, three of three happen one time in eight.
+  EXPECT_EQ(grown_with(20, 0.01), 3);
+  // Without the chance test the region grows either way.
+  EXPECT_GE(grown_with(20, 1.0), person * 3 / 4);
+}
+
 TEST(LiftedPointSigma, GrowsWithDepthAndPyramidLevel) {
   EXPECT_GT(LiftedPointSigma(4.0, 1.0, 525.0), 4.0 * LiftedPointSigma(1.0, 1.0, 525.0));
   EXPECT_GT(LiftedPointSigma(1.0, 2.0, 525.0), LiftedPointSigma(1.0, 1.0, 525.0));
@@ -170,8 +222,9 @@ TEST(LiftedPointSigma, GrowsWithDepthAndPyramidLevel) {
 // Two frames 0.4 s apart of a wall 3 m away and a person who walked from 1.5 to 1.9 m away; 20
 // wall keypoints of the second frame look different (fresh descriptors) and cannot be matched.
 // Proven static: exactly the wall keypoints matched over the baseline; the person moved, the 20
-// were never judged.
-TEST(MotionSegmenter, ProvesStaticOnlyTheKeypointsMatchedOverTheBaseline) {
+// were never judged. With `skip_depth_edges`, nor were those on the person's outline (within two
+// pixels of it, either side), where the depth jumps.
+void ExpectProvenStaticOnlyWhereMatched(const MotionSegmenterOptions& options) {
   const geometry::PinholeCamera camera(
       {.fx = 500, .fy = 500, .cx = 320, .cy = 240, .width = 640, .height = 480},
       geometry::Distortion());
@@ -204,7 +257,7 @@ TEST(MotionSegmenter, ProvesStaticOnlyTheKeypointsMatchedOverTheBaseline) {
       ++fresh;
     }
   }
-  MotionSegmenter segmenter(MotionSegmenterOptions(), ScalePyramid(1.2, 8));
+  MotionSegmenter segmenter(options, ScalePyramid(1.2, 8));
   EXPECT_FALSE(segmenter.FlagMoving(frame(1.5f, descriptors), 0.0).whole_baseline);
   const MotionVerdicts verdicts = segmenter.FlagMoving(frame(1.9f, later), 0.4);
   ASSERT_TRUE(verdicts.whole_baseline);
@@ -212,11 +265,26 @@ TEST(MotionSegmenter, ProvesStaticOnlyTheKeypointsMatchedOverTheBaseline) {
   const std::vector<bool>& proven = verdicts.proven_static;
   ASSERT_EQ(proven.size(), static_cast<std::size_t>(count));
   for (std::size_t i = 0; i < proven.size(); ++i) {
-    EXPECT_EQ(proven[i], !on_person[i] && !unmatched[i]) << "keypoint " << i;
+    const cv::Point2f& point = keypoints[i].pt;
+    const cv::Rect outline_band(person.x - 2, person.y - 2, person.width + 4, person.height + 4);
+    const cv::Rect inner(person.x + 3, person.y + 3, person.width - 6, person.height - 6);
+    const bool on_outline = outline_band.contains(point) && !inner.contains(point);
+    const bool unjudged = unmatched[i] || (options.skip_depth_edges && on_outline);
+    EXPECT_EQ(proven[i], !on_person[i] && !unjudged) << "keypoint " << i;
     if (on_person[i]) {
       EXPECT_TRUE(moving[i]) << "keypoint " << i;
     }
   }
+}
+
+TEST(MotionSegmenter, ProvesStaticOnlyTheKeypointsMatchedOverTheBaseline) {
+  ExpectProvenStaticOnlyWhereMatched(MotionSegmenterOptions());
+}
+
+TEST(MotionSegmenter, BehindADetectorLeavesTheDepthEdgesUnjudged) {
+  const MotionSegmenterOptions options = MotionSegmenterOptions::BehindDetector();
+  ASSERT_TRUE(options.skip_depth_edges);
+  ExpectProvenStaticOnlyWhereMatched(options);
 }
 
 }  // namespace

@@ -232,8 +232,9 @@ struct SlamOptions {
   // regions around them, are neither matched nor mapped; before each pose optimisation, matches
   // that do not keep their distances to the static world's are dropped. It needs no detector,
   // and catches what a detector does not know. Off by default: in fast rotation (tum fr1/rpy)
-  // depth that lags the colour image makes static points fail the test too, and frames are lost
-  // (docs/slam.md).
+  // keypoints on depth edges and chance clusters of wrong matches make static points fail the
+  // test too, and frames are lost. Runs with a detector use `moving` =
+  // MotionSegmenterOptions::BehindDetector(), which leaves those out (docs/slam.md).
   bool reject_moving_points = false;
   MotionSegmenterOptions moving;
   // A map point that moved in this many tracked frames in a row is culled: once could be a wrong
