@@ -375,16 +375,23 @@ void Tracker::KeepUntilTheMapStarts(const Frame& frame) {
 
 void Tracker::PoseFramesBeforeMap(const KeyFrame& first) {
   // From the first keyframe's matches, with outliers and moving points dropped: the inliers.
+  // The frames are walked back from the map's start, each starting from the pose of the frame
+  // after it moved on by the motion between those two: in a fast turn the earliest of them
+  // (a third of a second before the start, when moving points are rejected) have turned too far
+  // from the first keyframe to be found near its pose.
+  geometry::Pose later = first.pose_cw();
+  geometry::Pose step = geometry::Pose::Identity();  // from the later frame to the earlier one
   const auto optimise = [&](Frame& frame, std::vector<MapPoint*> matches) {
     for (std::size_t i = 0; i < matches.size(); ++i) {
       if (frame.moving[i]) matches[i] = nullptr;
     }
     frame.map_points = std::move(matches);
     frame.outlier.assign(frame.map_points.size(), false);
-    frame.pose_cw = first.pose_cw();
+    frame.pose_cw = step * later;
     return OptimizePose(frame, pyramid_, options_.bf);
   };
-  for (auto& [record, frame] : frames_before_map_) {
+  for (auto it = frames_before_map_.rbegin(); it != frames_before_map_.rend(); ++it) {
+    auto& [record, frame] = *it;
     std::vector<MapPoint*> matches;
     int inliers = 0;
     if (strict_matcher_.SearchByDescriptor(first, frame, matches) >= kMinReferenceMatches) {
@@ -392,13 +399,18 @@ void Tracker::PoseFramesBeforeMap(const KeyFrame& first) {
     }
     if (inliers < options_.min_tracked_inliers) {
       // As for the first frame after the start: in the dark, descriptors alone can leave too
-      // few matches, and the frames just before barely moved, so they are searched by position.
+      // few matches, and the frame moved little from its guess, so it is searched by position.
       frame.map_points.assign(frame.map_points.size(), nullptr);
-      frame.pose_cw = first.pose_cw();
+      frame.pose_cw = step * later;
       matcher_.SearchByProjection(frame, first, {}, kStillRadiusPx, Matcher::kThresholdHigh);
       inliers = optimise(frame, frame.map_points);
     }
-    if (inliers < options_.min_tracked_inliers) continue;
+    if (inliers < options_.min_tracked_inliers) {
+      later = step * later;  // the next earlier frame starts a step further back
+      continue;
+    }
+    step = frame.pose_cw * later.inverse();
+    later = frame.pose_cw;
     FrameRecord& posed = records_[record];
     posed.reference = &first;
     posed.pose_c_r = frame.pose_cw * first.pose_cw().inverse();
