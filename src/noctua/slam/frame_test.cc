@@ -43,7 +43,8 @@ TEST(FrameFeatures, MarksKeypointsWhereTheDepthJumpsOrHasAHole) {
       {{297.0f, 240.0f}, false},  // on the wall, three pixels from the box
       {{303.0f, 240.0f}, false},  // on the box, three pixels in
       {{102.0f, 101.0f}, true},   // the hole within two pixels
-      {{103.0f, 100.0f}, false}, {{400.0f, 300.0f}, false},  // noise on one surface is no edge
+      {{103.0f, 100.0f}, false},  // the hole three pixels away
+      {{400.0f, 300.0f}, false},  // noise on one surface is no edge
       {{0.0f, 0.0f}, false},      // the image's corner: the neighbourhood is cut, not a hole
       {{100.0f, 100.0f}, false},  // in the hole: no depth, nothing to judge
   };
@@ -58,8 +59,9 @@ TEST(FrameFeatures, MarksKeypointsWhereTheDepthJumpsOrHasAHole) {
   EXPECT_EQ(features.depth(8), 0.0);
   // The flags survive moving to the middle row; features restored without them have none.
   const FrameFeatures moved = features.AtMiddleRow({0.0, 1.0, 0.0}, {0.0, 0.0, 0.0}, kReadoutS);
-  for (int i = 0; i < features.size(); ++i)
+  for (int i = 0; i < features.size(); ++i) {
     EXPECT_EQ(moved.OnDepthEdge(i), features.OnDepthEdge(i));
+  }
   const FrameFeatures restored = ThreeRowsAndOneWithoutDepth();
   for (int i = 0; i < restored.size(); ++i) EXPECT_FALSE(restored.OnDepthEdge(i));
 }
