@@ -656,6 +656,38 @@ TEST_F(RgbdSlamTest, PosesTheFramesSeenBeforeTheMapStarts) {
   EXPECT_LT(ate.translation_m.rmse, 0.02);
 }
 
+// Frames 1-4 show only the right quarter of the view: tracking keeps fewer than twice the
+// inliers a frame needs, too soon after the start for a pose certainty to compare with. The map
+// does not wait for a surer pose: a keyframe comes before frame 5 (the first frame that could be
+// compared), and no frame is lost. With the whole view, frames 1-4 find most of the points and
+// make none.
+TEST_F(RgbdSlamTest, MakesAKeyFrameRightAfterTheStartWhenTrackingIsWeak) {
+  const auto narrow_view = [](int index, const cv::Mat& image) {
+    cv::Mat out = image.clone();
+    if (index >= 1 && index <= 4) out.colRange(0, out.cols * 3 / 4).setTo(cv::Scalar::all(0));
+    return out;
+  };
+  const auto first_keyframe_after_the_start = [](const SequenceRun& run) {
+    for (std::size_t i = 1; i < run.frames.size(); ++i) {
+      if (run.frames[i].new_keyframe) return static_cast<int>(i);
+    }
+    return -1;
+  };
+  const SequenceRun narrow = Run(30, narrow_view);
+  ASSERT_EQ(narrow.frames.size(), 30u);
+  EXPECT_EQ(narrow.frames[0].method, "init");
+  const int weak = first_keyframe_after_the_start(narrow);
+  ASSERT_GE(weak, 1);
+  EXPECT_LT(weak, 5);
+  EXPECT_LT(narrow.frames[static_cast<std::size_t>(weak)].inliers,
+            2 * setup_->options.min_tracked_inliers);
+  EXPECT_TRUE(narrow.lost_frames.empty());
+  EXPECT_LT(Ate(narrow.trajectory), 0.03);
+  const SequenceRun whole = Run(5);
+  ASSERT_EQ(whole.frames.size(), 5u);
+  EXPECT_EQ(first_keyframe_after_the_start(whole), -1);
+}
+
 // Every frame reaches the lookahead once, in order, after transform_image and `lookahead_frames`
 // frames before its extraction, with and without extraction overlapped with tracking; the
 // trajectory is the one of a run without a lookahead.

@@ -174,9 +174,10 @@ TrackResult Tracker::Track(Frame frame) {
       // A keyframe anchors the points made from it: one made from a pose less certain than
       // the frames before it (a fast turn) places them with that pose's error, and every run
       // that made it there parted from the others (docs/slam.md, "Where runs part"). It waits
-      // for a surer frame, unless the map has just lost points to a late dynamic region
-      // (ForgetMapPointsIn): then the first frame after it makes the keyframe that refills it.
-      if (!localize_ && NeedNewKeyFrame() && (renew_keyframe_ || AsCertainAsRecentFrames())) {
+      // for a surer frame (PoseCanAnchorKeyFrame), unless the map has just lost points to a late
+      // dynamic region (ForgetMapPointsIn): then the first frame after it makes the keyframe that
+      // refills it.
+      if (!localize_ && NeedNewKeyFrame() && (renew_keyframe_ || PoseCanAnchorKeyFrame())) {
         CreateNewKeyFrame();
         result.new_keyframe = true;
       }
@@ -456,7 +457,6 @@ void Tracker::UpdateLastFrame() {
 
 std::optional<CentrePrior> Tracker::MotionPrior() const {
   const double acceleration = options_.motion_prior_acceleration_mps2;
-  constexpr std::size_t kSettledFrames = 5;
   if (acceleration <= 0.0 || !velocity_.has_value() || last_ == nullptr ||
       last_->id != current_->id - 1 || recent_uncertainty_.size() < kSettledFrames) {
     return {};
@@ -893,8 +893,17 @@ std::vector<bool> Tracker::MatchesOnProbation() const {
   return on_probation;
 }
 
+bool Tracker::PoseCanAnchorKeyFrame() const {
+  // Right after the map starts there are no usual poses to be as certain as. Waiting for them
+  // costs the map when the first frames keep barely enough of its points to be tracked (a dark
+  // start, most of the first map's points judged moving): then an uncertain keyframe costs less
+  // than the frames lost without one.
+  if (recent_uncertainty_.size() < kSettledFrames) return TrackingWeak();
+  return AsCertainAsRecentFrames();
+}
+
 bool Tracker::AsCertainAsRecentFrames() const {
-  if (recent_uncertainty_.size() < 5) return false;
+  if (recent_uncertainty_.size() < kSettledFrames) return false;
   std::vector<double> position, rotation;
   for (const PoseUncertainty& u : recent_uncertainty_) {
     position.push_back(u.position_sigma_m);
@@ -937,6 +946,10 @@ bool Tracker::NeedNewKeyFrame() const {
   // max_queued_keyframes others, finishing the oldest first): ORB-SLAM's condition c1b always
   // holds and a keyframe is made whenever the tracked points thin out (c2).
   return (inliers_ < reference_matches * ratio || need_close) && inliers_ > 15;
+}
+
+bool Tracker::TrackingWeak() const {
+  return inliers_ < kWeakTrackingMargin * options_.min_tracked_inliers;
 }
 
 void Tracker::CreateNewKeyFrame() {

@@ -159,7 +159,14 @@ class Tracker {
   void HoldForRefinement(std::size_t record);
   void RefineTrackedFrames(std::optional<int> at_most);
   bool NeedNewKeyFrame() const;
+  // Whether the frame's pose is sure enough to place a keyframe's points: as certain as the
+  // recent frames' poses once there are kSettledFrames of them; before that, right after the
+  // map starts, only when tracking is weak.
+  bool PoseCanAnchorKeyFrame() const;
   bool AsCertainAsRecentFrames() const;
+  // The frame kept fewer than kWeakTrackingMargin times the inliers a frame needs to be tracked
+  // (SlamOptions::min_tracked_inliers): a next frame that finds half as many is lost.
+  bool TrackingWeak() const;
   // Where the camera should be if it kept its velocity (SlamOptions::motion_prior_*); none
   // without a velocity or before the pose's usual certainty is known.
   std::optional<CentrePrior> MotionPrior() const;
@@ -253,6 +260,9 @@ class Tracker {
   // Descriptor matches against a keyframe needed before a pose is optimised from them
   // (TrackReferenceKeyFrame, PoseFramesBeforeMap), ORB-SLAM's.
   static constexpr int kMinReferenceMatches = 15;
+  static constexpr int kWeakTrackingMargin = 2;
+  // Tracked frames whose pose certainty tells what is usual (the median of recent_uncertainty_).
+  static constexpr std::size_t kSettledFrames = 5;
   struct FrameBeforeMap {
     std::size_t record;  // in records_
     Frame frame;
