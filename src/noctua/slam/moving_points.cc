@@ -169,10 +169,11 @@ double BinomialTailAtLeast(int successes, int trials, double probability) {
   if (probability >= 1.0) return 1.0;
   const double log_p = std::log(probability);
   const double log_q = std::log1p(-probability);
+  const double log_trials_factorial = std::lgamma(trials + 1.0);
   double tail = 0.0;
   for (int k = successes; k <= trials; ++k) {
-    tail += std::exp(std::lgamma(trials + 1.0) - std::lgamma(k + 1.0) -
-                     std::lgamma(trials - k + 1.0) + k * log_p + (trials - k) * log_q);
+    tail += std::exp(log_trials_factorial - std::lgamma(k + 1.0) - std::lgamma(trials - k + 1.0) +
+                     k * log_p + (trials - k) * log_q);
   }
   return std::min(1.0, tail);
 }

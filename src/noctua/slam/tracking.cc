@@ -382,32 +382,34 @@ void Tracker::PoseFramesBeforeMap(const KeyFrame& first) {
   // from the first keyframe to be found near its pose.
   geometry::Pose later = first.pose_cw();
   geometry::Pose step = geometry::Pose::Identity();  // from the later frame to the earlier one
-  const auto optimise = [&](Frame& frame, std::vector<MapPoint*> matches) {
+  const auto optimise = [&](Frame& frame, std::vector<MapPoint*> matches,
+                            const geometry::Pose& guess) {
     for (std::size_t i = 0; i < matches.size(); ++i) {
       if (frame.moving[i]) matches[i] = nullptr;
     }
     frame.map_points = std::move(matches);
     frame.outlier.assign(frame.map_points.size(), false);
-    frame.pose_cw = step * later;
+    frame.pose_cw = guess;
     return OptimizePose(frame, pyramid_, options_.bf);
   };
   for (auto it = frames_before_map_.rbegin(); it != frames_before_map_.rend(); ++it) {
     auto& [record, frame] = *it;
+    const geometry::Pose guess = step * later;
     std::vector<MapPoint*> matches;
     int inliers = 0;
     if (strict_matcher_.SearchByDescriptor(first, frame, matches) >= kMinReferenceMatches) {
-      inliers = optimise(frame, std::move(matches));
+      inliers = optimise(frame, std::move(matches), guess);
     }
     if (inliers < options_.min_tracked_inliers) {
       // As for the first frame after the start: in the dark, descriptors alone can leave too
       // few matches, and the frame moved little from its guess, so it is searched by position.
       frame.map_points.assign(frame.map_points.size(), nullptr);
-      frame.pose_cw = step * later;
+      frame.pose_cw = guess;
       matcher_.SearchByProjection(frame, first, {}, kStillRadiusPx, Matcher::kThresholdHigh);
-      inliers = optimise(frame, frame.map_points);
+      inliers = optimise(frame, frame.map_points, guess);
     }
     if (inliers < options_.min_tracked_inliers) {
-      later = step * later;  // the next earlier frame starts a step further back
+      later = guess;  // the next earlier frame starts a step further back
       continue;
     }
     step = frame.pose_cw * later.inverse();
