@@ -132,6 +132,9 @@ struct Frame {
   // proven_static); empty when moving points are not rejected. Map points made from the others
   // start on probation (MapPoint::proven).
   std::vector<bool> proven_static;
+  // The depth image (CV_32F metres), kept only for SlamOptions::depth_fallback (empty otherwise):
+  // the motion between two frames' depth holds when their features cannot be matched.
+  cv::Mat depth_m;
   geometry::Pose pose_cw = geometry::Pose::Identity();  // world to camera
 };
 

@@ -57,6 +57,10 @@ RgbdSlam::Extracted RgbdSlam::Extract(const cv::Mat& image, const cv::Mat& depth
   }
   extracted.features = std::make_shared<const FrameFeatures>(
       std::move(keypoints), descriptors, depth, camera_, options_.bf, options_.min_depth_m);
+  // Kept for SlamOptions::depth_fallback only, as the frame's own copy: a caller may reuse its
+  // buffer for the next frame, and the depth is compared with the next frame's.
+  if (options_.depth_fallback)
+    extracted.depth_m = depth.data == depth_m.data ? depth.clone() : depth;
   extracted.timestamp = timestamp;
   extracted.extract_ms = watch.ElapsedMs();
   if (segmenter_ != nullptr) {
@@ -73,6 +77,7 @@ TrackResult RgbdSlam::Track(Extracted extracted, bool advance_mapping) {
   MotionVerdicts& motion = extracted.motion;
   if (!motion.moving.empty()) frame.moving = std::move(motion.moving);
   frame.moving_known = motion.whole_baseline;
+  frame.depth_m = std::move(extracted.depth_m);
   frame.proven_static = std::move(motion.proven_static);
   TrackResult result = tracker_.Track(std::move(frame));
   result.stage_ms["extract"] = extracted.extract_ms;

@@ -35,6 +35,9 @@ class RgbdSlam {
   // touches no tracking state, so the result does not depend on how the two overlap.
   struct Extracted {
     std::shared_ptr<const FrameFeatures> features;
+    // As the features read it (SlamOptions::max_depth_m applied); only with
+    // SlamOptions::depth_fallback.
+    cv::Mat depth_m;
     double timestamp = 0.0;
     double extract_ms = 0.0;
     // With SlamOptions::reject_moving_points: what MotionSegmenter found (empty flags without),

@@ -10,7 +10,9 @@
 #include <fstream>
 #include <iostream>
 #include <iterator>
+#include <map>
 #include <mutex>
+#include <numeric>
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <optional>
@@ -66,6 +68,17 @@ class RgbdSlamTest : public ::testing::Test {
   // ATE RMSE (m) against the sequence's ground truth.
   static double Ate(const io::Trajectory& trajectory) {
     return eval::ComputeAte(sequence_->ground_truth(), trajectory).translation_m.rmse;
+  }
+  // RMS of the position errors (m) of trajectory poses [first, first + count), the trajectory
+  // aligned to the ground truth as a whole.
+  static double StretchRms(const io::Trajectory& trajectory, std::size_t first, std::size_t count) {
+    const eval::AteResult ate = eval::ComputeAte(sequence_->ground_truth(), trajectory);
+    EXPECT_GE(ate.errors_m.size(), first + count);
+    double sum = 0.0;
+    for (std::size_t i = first; i < first + count && i < ate.errors_m.size(); ++i) {
+      sum += ate.errors_m[i] * ate.errors_m[i];
+    }
+    return std::sqrt(sum / static_cast<double>(count));
   }
   static io::Sequence* sequence_;
   static SlamSetup* setup_;
@@ -865,6 +878,106 @@ TEST_F(RgbdSlamTest, RecoversAfterTwentyBlackFrames) {
   EXPECT_LT(ate.translation_m.rmse, 0.09);
 }
 
+// The same twenty black frames with their depth (a camera that lights its depth itself, in the
+// dark): each is posed by aligning its depth with the frame before (depth_fallback on), reported
+// as coasting (not measured against the map) and bridged like it; none is
+// lost, none makes a keyframe (no keypoints), and the map is found again right after the stretch,
+// from the aligned pose. Bridged, frames 40-49 end closer to the ground truth than the coasted ones
+// (measured: 11.5 against 18.4 mm rms).
+TEST_F(RgbdSlamTest, PosesBlackFramesByTheirDepth) {
+  const auto black = [](int index, const cv::Mat& image) {
+    return index >= 40 && index < 60 ? cv::Mat(image.size(), image.type(), cv::Scalar::all(0))
+                                     : image;
+  };
+  std::map<std::pair<bool, bool>, SequenceRun> runs;  // by (depth_fallback, bridge)
+  for (const bool depth : {false, true}) {
+    for (const bool bridge : {false, true}) {
+      SlamOptions options = setup_->options;
+      options.depth_fallback = depth;
+      options.bridge_coasted_frames = bridge;
+      options.smooth_trajectory = false;
+      RunOptions run_options;
+      run_options.max_frames = 90;
+      run_options.transform_image = black;
+      runs[{depth, bridge}] =
+          RunSequence(*sequence_, setup_->camera.depth_factor, setup_->camera.Camera(),
+                      Orb(*setup_), options, run_options);
+    }
+  }
+  const SequenceRun& aligned = runs[{true, true}];
+  const SequenceRun& coasted = runs[{false, true}];
+  EXPECT_TRUE(aligned.lost_frames.empty());
+  std::vector<int> stretch(20);
+  std::iota(stretch.begin(), stretch.end(), 40);
+  EXPECT_EQ(aligned.coasted_frames, stretch);
+  for (const int i : stretch) {
+    const FrameOutcome& frame = aligned.frames[static_cast<std::size_t>(i)];
+    EXPECT_EQ(frame.state, TrackingState::kCoasting) << i;
+    EXPECT_EQ(frame.method, "depth") << i;
+    EXPECT_FALSE(frame.new_keyframe) << i;  // no keypoints to make one of
+    EXPECT_EQ(frame.inliers, 0) << i;
+  }
+  for (int i = 60; i < 90; ++i) {
+    EXPECT_EQ(aligned.frames[static_cast<std::size_t>(i)].state, TrackingState::kOk) << i;
+    EXPECT_NE(aligned.frames[static_cast<std::size_t>(i)].method, "depth") << i;
+  }
+  ASSERT_EQ(aligned.trajectory.size(), 90u);
+  ASSERT_EQ(coasted.trajectory.size(), 80u);  // frames 50-59 had no pose
+  // Frames 40-49 (indices 40-49 of both trajectories), bridged in both runs: between frames 39
+  // and 60, which the map found again from the aligned pose, or relocalised.
+  const double aligned_rms = StretchRms(aligned.trajectory, 40, 10);
+  const double coasted_rms = StretchRms(coasted.trajectory, 40, 10);
+  RecordProperty("stretch_rms_aligned_mm", std::to_string(aligned_rms * 1000.0));
+  RecordProperty("stretch_rms_coasted_mm", std::to_string(coasted_rms * 1000.0));
+  EXPECT_LT(aligned_rms, coasted_rms);
+}
+
+// From frame 40 on the images are inverted: FAST finds the same corners, but every descriptor
+// differs from the map's, while consecutive inverted frames match each other. (Frame 40 still
+// keeps 31 inliers.) Without the depth the run coasts and is then lost for good, as a camera is
+// that turns beyond its map in the dark (tum_fr1_rpy_200's frames 100-199 at 15 %, docs/slam.md).
+// With depth_fallback the depth poses frames 41-50 (coasting); the 11th such frame, whose
+// features agree with the depth's motion, becomes a keyframe, and the frames after it are tracked
+// on the map it starts (measured: ATE 20 mm over all 70 frames).
+TEST_F(RgbdSlamTest, StartsAKeyFrameFromDepthOnceTheMapCannotBeFoundAgain) {
+  const auto inverted = [](int index, const cv::Mat& image) {
+    if (index < 40) return image;
+    cv::Mat out;
+    cv::bitwise_not(image, out);
+    return out;
+  };
+  std::vector<SequenceRun> runs;
+  for (const bool depth : {false, true}) {
+    SlamOptions options = setup_->options;
+    options.depth_fallback = depth;
+    RunOptions run_options;
+    run_options.max_frames = 70;
+    run_options.transform_image = inverted;
+    runs.push_back(RunSequence(*sequence_, setup_->camera.depth_factor, setup_->camera.Camera(),
+                               Orb(*setup_), options, run_options));
+  }
+  const SequenceRun& without = runs[0];
+  const SequenceRun& with = runs[1];
+  EXPECT_EQ(without.lost_frames.size(), 19u);  // 51-69, after 10 coasted
+  EXPECT_TRUE(with.lost_frames.empty());
+  for (int i = 41; i < 51; ++i) {
+    EXPECT_EQ(with.frames[static_cast<std::size_t>(i)].state, TrackingState::kCoasting) << i;
+    EXPECT_EQ(with.frames[static_cast<std::size_t>(i)].method, "depth") << i;
+  }
+  const FrameOutcome& anchor = with.frames[51];
+  EXPECT_EQ(anchor.state, TrackingState::kOk);
+  EXPECT_EQ(anchor.method, "depth");
+  EXPECT_TRUE(anchor.new_keyframe);
+  for (int i = 52; i < 70; ++i) {
+    EXPECT_EQ(with.frames[static_cast<std::size_t>(i)].state, TrackingState::kOk) << i;
+    EXPECT_NE(with.frames[static_cast<std::size_t>(i)].method, "depth") << i;
+  }
+  const eval::AteResult ate = eval::ComputeAte(sequence_->ground_truth(), with.trajectory);
+  EXPECT_EQ(ate.translation_m.count, 70);
+  RecordProperty("ate_mm", std::to_string(ate.translation_m.rmse * 1000.0));
+  EXPECT_LT(ate.translation_m.rmse, 0.05);
+}
+
 // Eight black frames: they coast on the motion model; once frame 48 is tracked again the
 // finished trajectory bridges them, each pose interpolated in time between frames 39 and 48,
 // which both ends measured; the prediction (bridge_coasted_frames off) is further from the
@@ -910,16 +1023,10 @@ TEST_F(RgbdSlamTest, BridgesCoastedFramesBetweenTheTrackedFramesAroundThem) {
     EXPECT_TRUE(got.pose.matrix().isApprox(expected.matrix(), 1e-12));
     EXPECT_FALSE(got.pose.matrix().isApprox(pose(predicted, i).pose.matrix(), 1e-6));
   }
-  // Judged on the coasted frames alone, each trajectory aligned to the ground truth as a whole.
-  const auto coasted_rms = [this](const SequenceRun& run) {
-    const eval::AteResult ate = eval::ComputeAte(sequence_->ground_truth(), run.trajectory);
-    EXPECT_EQ(ate.errors_m.size(), 70u);  // every frame associates: index = frame
-    double sum = 0.0;
-    for (std::size_t i = 40; i < 48; ++i) sum += ate.errors_m[i] * ate.errors_m[i];
-    return std::sqrt(sum / 8.0);
-  };
-  const double predicted_rms = coasted_rms(predicted);
-  const double bridged_rms = coasted_rms(bridged);
+  // Judged on the coasted frames alone (every frame associates: index = frame).
+  EXPECT_EQ(eval::ComputeAte(sequence_->ground_truth(), bridged.trajectory).errors_m.size(), 70u);
+  const double predicted_rms = StretchRms(predicted.trajectory, 40, 8);
+  const double bridged_rms = StretchRms(bridged.trajectory, 40, 8);
   RecordProperty("coasted_rms_predicted_mm", std::to_string(predicted_rms * 1000.0));
   RecordProperty("coasted_rms_bridged_mm", std::to_string(bridged_rms * 1000.0));
   EXPECT_LT(bridged_rms, predicted_rms);
@@ -1126,12 +1233,15 @@ TEST_F(RgbdSlamTest, BadConfigAndBadDataFailClearly) {
   EXPECT_THAT(error_of([&] { LoadSlamSetup(write(camera + "slam:\n  min_initial_points: 5\n")); }),
               HasSubstr("min_initial_points must be at least 10"));
   EXPECT_TRUE(defaults.bridge_coasted_frames);
+  EXPECT_FALSE(defaults.depth_fallback);
   const SlamOptions coasting =
-      LoadSlamSetup(
-          write(camera + "slam:\n  max_coasting_frames: 4\n  bridge_coasted_frames: false\n"))
+      LoadSlamSetup(write(camera +
+                          "slam:\n  max_coasting_frames: 4\n  bridge_coasted_frames: false\n"
+                          "  depth_fallback: true\n"))
           .options;
   EXPECT_EQ(coasting.max_coasting_frames, 4);
   EXPECT_FALSE(coasting.bridge_coasted_frames);
+  EXPECT_TRUE(coasting.depth_fallback);
   EXPECT_THAT(
       error_of([&] { LoadSlamSetup(write(camera + "slam:\n  max_coasting_frames: -1\n")); }),
       HasSubstr("max_coasting_frames must not be negative"));

@@ -111,6 +111,7 @@ void ReadSlamSection(const YAML::Node& root, const std::string& source, SlamOpti
                                                "min_inliers_after_relocalisation",
                                                "certain_sigma_ratio",
                                                "bridge_coasted_frames",
+                                               "depth_fallback",
                                                "motion_prior_acceleration_mps2",
                                                "motion_prior_outlier_sigmas",
                                                "loop_closing",
@@ -137,6 +138,7 @@ void ReadSlamSection(const YAML::Node& root, const std::string& source, SlamOpti
                   options.min_inliers_after_relocalisation);
   io::ReadSetting(section, "certain_sigma_ratio", source, options.certain_sigma_ratio);
   io::ReadSetting(section, "bridge_coasted_frames", source, options.bridge_coasted_frames);
+  io::ReadSetting(section, "depth_fallback", source, options.depth_fallback);
   io::ReadSetting(section, "motion_prior_acceleration_mps2", source,
                   options.motion_prior_acceleration_mps2);
   io::ReadSetting(section, "motion_prior_outlier_sigmas", source,

@@ -86,9 +86,13 @@ TrackResult Tracker::Track(Frame frame) {
   current_ = std::make_unique<Frame>(std::move(frame));
   bool corrected = velocity_.has_value() && CorrectRollingShutter(*current_, *velocity_);
   tracked_prior_.reset();
+  depth_alignment_.reset();
   mapper_.CollectBundleAdjustment(/*wait=*/false);
   Stopwatch watch;
   bool ok = false;
+  // Posed by depth alone and no keyframe: not measured against the map, so reported and bridged
+  // as a coasted frame (SlamOptions::bridge_coasted_frames), while the next frame still tracks on.
+  bool posed_by_depth = false;
   if (state_ == TrackingState::kNotInitialised) {
     // With moving points rejected, the map starts once they can be told apart.
     ok = (!options_.reject_moving_points || current_->moving_known) && Initialise(*current_);
@@ -104,7 +108,8 @@ TrackResult Tracker::Track(Frame frame) {
     if (ok) result.position_sigma_m = result.rotation_sigma_deg = 0.0;  // the map's origin
     result.stage_ms["track"] = watch.ElapsedMs();
   } else {
-    if (state_ == TrackingState::kOk) {
+    const bool was_tracking = state_ == TrackingState::kOk;
+    if (was_tracking) {
       if (velocity_.has_value() && current_->id >= last_relocalisation_frame_id_ + 2) {
         ok = TrackWithMotionModel(*velocity_, kMotionModelRadiusPx);
         result.method = "motion";
@@ -136,13 +141,49 @@ TrackResult Tracker::Track(Frame frame) {
       reference_ = reference_ != nullptr && !reference_->bad() ? reference_ : last_keyframe_;
       ok = TrackLocalMap();
     }
+    // The features failed right after a tracked frame: its depth may still give the motion, and
+    // the local map is searched again from there. A pose from depth alone is kept even where the
+    // map's points are not found again at it (reported as coasted, DepthPoseShouldAnchorKeyFrame).
+    bool depth_only = false;
+    if (!ok && was_tracking && TrackByDepth()) {
+      result.method = "depth";
+      reference_ = reference_ != nullptr && !reference_->bad() ? reference_ : last_keyframe_;
+      const geometry::Pose aligned = current_->pose_cw;
+      ok = TrackLocalMap();
+      if (!ok) {
+        // Not found near the aligned pose, the map may still be found anywhere, as after a loss:
+        // where people fill the view, the depth follows them.
+        std::fill(current_->map_points.begin(), current_->map_points.end(), nullptr);
+        std::fill(current_->outlier.begin(), current_->outlier.end(), false);
+        ok = Relocalise() && TrackLocalMap();
+        if (ok) result.method = "relocalisation";
+      }
+      if (!ok) {
+        current_->pose_cw = aligned;
+        std::fill(current_->map_points.begin(), current_->map_points.end(), nullptr);
+        std::fill(current_->outlier.begin(), current_->outlier.end(), false);
+        ok = depth_only = true;
+      }
+    }
     result.stage_ms["local_map"] = watch.ElapsedMs();
     watch.Restart();
     state_ = ok ? TrackingState::kOk : TrackingState::kLost;
     result.state = state_;
     if (ok) coasting_velocity_ = velocity_;
-    result.inliers = ok ? inliers_ : 0;
-    if (ok) {
+    frames_posed_by_depth_ = depth_only ? frames_posed_by_depth_ + 1 : 0;
+    result.inliers = ok && !depth_only ? inliers_ : 0;
+    if (depth_only) {
+      // As a coasted pose's: the motion since the map last fixed a pose, which the error of the
+      // chained alignments is a fraction of (their formal covariance is far too sure: on fr1's
+      // consecutive depth images they miss the motion by 0.4 degrees and 5 mm on average, where
+      // it claims under 0.02 degrees and a millimetre; docs/slam.md).
+      if (frames_posed_by_depth_ == 1) depth_chain_motion_ = {};
+      const geometry::Pose& step = depth_alignment_->current_from_reference;
+      depth_chain_motion_.translation_m += step.translation().norm();
+      depth_chain_motion_.rotation_rad += geometry::RotationAngle(step);
+      result.position_sigma_m = depth_chain_motion_.translation_m;
+      result.rotation_sigma_deg = depth_chain_motion_.rotation_rad * 180.0 / M_PI;
+    } else if (ok) {
       result.position_sigma_m = uncertainty_.position_sigma_m;
       result.rotation_sigma_deg = uncertainty_.rotation_sigma_deg;
       result.residual_px = MedianReprojectionError(*current_, pyramid_, options_.bf);
@@ -177,10 +218,14 @@ TrackResult Tracker::Track(Frame frame) {
       // for a surer frame (PoseCanAnchorKeyFrame), unless the map has just lost points to a late
       // dynamic region (ForgetMapPointsIn): then the first frame after it makes the keyframe that
       // refills it.
-      if (!localize_ && NeedNewKeyFrame() && (renew_keyframe_ || PoseCanAnchorKeyFrame())) {
+      if (!localize_ &&
+          (depth_only ? DepthPoseShouldAnchorKeyFrame()
+                      : NeedNewKeyFrame() && (renew_keyframe_ || PoseCanAnchorKeyFrame()))) {
         CreateNewKeyFrame();
         result.new_keyframe = true;
       }
+      posed_by_depth = depth_only && !result.new_keyframe;
+      if (posed_by_depth) result.state = TrackingState::kCoasting;
       for (std::size_t i = 0; i < current_->map_points.size(); ++i) {
         if (current_->outlier[i]) current_->map_points[i] = nullptr;
       }
@@ -203,11 +248,12 @@ TrackResult Tracker::Track(Frame frame) {
   if ((ok || coasted) && reference_ != nullptr) {
     record.reference = reference_;
     record.pose_c_r = current_->pose_cw * reference_->pose_cw().inverse();
-    record.coasted = coasted;
+    record.coasted = coasted || posed_by_depth;
     record.position_sigma_m = result.position_sigma_m;
   }
   records_.push_back(record);
-  if (ok && !localize_ && !result.new_keyframe && options_.refine_frames_after_keyframes > 0) {
+  if (ok && !posed_by_depth && !localize_ && !result.new_keyframe &&
+      options_.refine_frames_after_keyframes > 0) {
     HoldForRefinement(records_.size() - 1);
   }
   if (!unrefined_.empty()) {
@@ -260,6 +306,24 @@ void Tracker::UseMap(Map map, bool localize) {
   localize_ = localize;
   // Lost in a known map: the first frame goes straight to relocalisation.
   state_ = TrackingState::kLost;
+}
+
+bool Tracker::TrackByDepth() {
+  if (!options_.depth_fallback || localize_ || last_ == nullptr || last_->id + 1 != current_->id ||
+      last_->depth_m.empty() || current_->depth_m.empty()) {
+    return false;
+  }
+  if (depth_aligner_ == nullptr) {
+    depth_aligner_ = std::make_unique<geometry::DepthAligner>(current_->features->camera(),
+                                                              geometry::DepthAlignmentOptions{});
+  }
+  depth_alignment_ = depth_aligner_->Align(last_->depth_m, current_->depth_m,
+                                           velocity_.value_or(geometry::Pose::Identity()));
+  if (!depth_alignment_) return false;
+  std::fill(current_->map_points.begin(), current_->map_points.end(), nullptr);
+  std::fill(current_->outlier.begin(), current_->outlier.end(), false);
+  current_->pose_cw = depth_alignment_->current_from_reference * last_->pose_cw;
+  return true;
 }
 
 bool Tracker::Coast(TrackResult& result) {
@@ -371,6 +435,7 @@ bool Tracker::Initialise(Frame& frame) {
 void Tracker::KeepUntilTheMapStarts(const Frame& frame) {
   // Its record is the next one (Track pushes it after this).
   frames_before_map_.push_back({records_.size(), frame});
+  frames_before_map_.back().frame.depth_m.release();  // matched by descriptor only: not needed
   if (frames_before_map_.size() > kMaxFramesBeforeMap) frames_before_map_.pop_front();
 }
 
@@ -948,6 +1013,27 @@ bool Tracker::NeedNewKeyFrame() const {
   // max_queued_keyframes others, finishing the oldest first): ORB-SLAM's condition c1b always
   // holds and a keyframe is made whenever the tracked points thin out (c2).
   return (inliers_ < reference_matches * ratio || need_close) && inliers_ > 15;
+}
+
+bool Tracker::DepthPoseShouldAnchorKeyFrame() {
+  return frames_posed_by_depth_ > options_.max_coasting_frames &&
+         FeaturesAgreeingWithDepth() >= options_.min_tracked_inliers;
+}
+
+int Tracker::FeaturesAgreeingWithDepth() {
+  Frame& frame = *current_;
+  const geometry::Pose aligned = frame.pose_cw;
+  UpdateLastFrame();
+  std::fill(frame.map_points.begin(), frame.map_points.end(), nullptr);
+  matcher_.SearchByProjection(frame, *last_, kMotionModelRadiusPx);
+  RejectMovingMatches(false);
+  OptimizePose(frame, pyramid_, options_.bf);
+  const int agreeing = DiscardOutliers() + odometry_inliers_;
+  // The pose stays the depth's, and the frame has no match to the map.
+  frame.pose_cw = aligned;
+  std::fill(frame.map_points.begin(), frame.map_points.end(), nullptr);
+  std::fill(frame.outlier.begin(), frame.outlier.end(), false);
+  return agreeing;
 }
 
 bool Tracker::TrackingWeak() const {

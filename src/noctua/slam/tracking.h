@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "noctua/geometry/depth_alignment.h"
 #include "noctua/place/keyframe_database.h"
 #include "noctua/slam/frame.h"
 #include "noctua/slam/local_mapping.h"
@@ -23,9 +24,11 @@ namespace noctua::slam {
 enum class TrackingState {
   kNotInitialised,
   kOk,
-  // Not tracked, but given the pose the motion model predicts (for at most
+  // Not tracked against the map, but given the pose the motion model predicts (for at most
   // SlamOptions::max_coasting_frames in a row), with a confidence that says how little it is
-  // worth; relocalisation is tried on every such frame.
+  // worth, and relocalisation tried on every such frame; or (method "depth",
+  // SlamOptions::depth_fallback) the pose that aligning its depth with the frame before gives,
+  // the map searched again from there on the next frame.
   kCoasting,
   kLost,
 };
@@ -36,7 +39,9 @@ const char* TrackingStateName(TrackingState state);
 // How one frame went.
 struct TrackResult {
   TrackingState state = TrackingState::kNotInitialised;
-  // How it was tracked: "init", "motion", "reference", "still", "relocalisation"; "" when lost.
+  // How it was tracked: "init", "motion", "reference", "still", "relocalisation", "depth" (its
+  // pose from the depth alone, or the map found again from it: Tracker::TrackByDepth),
+  // "coasting"; "" when lost.
   std::string method;
   int keypoints = 0;
   int inliers = 0;
@@ -64,7 +69,7 @@ struct FrameRecord {
   long frame_id = 0;
   double timestamp = 0.0;
   const KeyFrame* reference = nullptr;  // nullptr: not tracked
-  bool coasted = false;                 // the motion model's pose (TrackingState::kCoasting)
+  bool coasted = false;                 // not measured against the map (TrackingState::kCoasting)
   double position_sigma_m = 0.0;        // TrackResult::position_sigma_m of the tracked pose
   geometry::Pose pose_c_r = geometry::Pose::Identity();
   // T_camera_world with the reference keyframe's pose as it is now; none when not tracked.
@@ -137,6 +142,10 @@ class Tracker {
   bool TrackWithMotionModel(const geometry::Pose& motion, double radius);
   bool TrackReferenceKeyFrame();
   bool Relocalise();
+  // SlamOptions::depth_fallback: the frame right after the last tracked one, posed by aligning
+  // their depth images (from the last frame's velocity); its matches are dropped. False when the
+  // option is off, localising, or the alignment cannot be trusted.
+  bool TrackByDepth();
   // Relocalisation candidates: keyframes with their descriptor matches to the current frame (at
   // least 15), most matches first (ties: the more recent keyframe), at most
   // relocalisation_candidates. With a vocabulary, only the keyframes the database finds are
@@ -167,6 +176,17 @@ class Tracker {
   // The frame kept fewer than kWeakTrackingMargin times the inliers a frame needs to be tracked
   // (SlamOptions::min_tracked_inliers): a next frame that finds half as many is lost.
   bool TrackingWeak() const;
+  // A frame posed by depth alone (TrackByDepth) makes a keyframe, so that the map follows the
+  // camera, once the map's points have not been found again for longer than a coasted pose is
+  // trusted (SlamOptions::max_coasting_frames), and only where the frame's own features agree
+  // with the depth's motion (FeaturesAgreeingWithDepth, at least min_tracked_inliers). Until then
+  // the map is searched again at each new pose: a short stretch rejoins the map it left. Where
+  // people fill the view the depth follows them, and the static features disagree.
+  bool DepthPoseShouldAnchorKeyFrame();
+  // The last frame's points (the map's, and those its depth lifts) that the current frame finds
+  // by projection from its depth pose and that stay inliers when the pose is fitted to them; the
+  // depth pose and the frame's (empty) matches are left as they were.
+  int FeaturesAgreeingWithDepth();
   // Where the camera should be if it kept its velocity (SlamOptions::motion_prior_*); none
   // without a velocity or before the pose's usual certainty is known.
   std::optional<CentrePrior> MotionPrior() const;
@@ -247,6 +267,14 @@ class Tracker {
   // Inliers of the current frame that are the last frame's temporary depth points, not map points.
   int odometry_inliers_ = 0;
   PoseUncertainty uncertainty_;  // of the current frame's pose after local-map tracking
+  std::unique_ptr<geometry::DepthAligner> depth_aligner_;    // made with the first frame's camera
+  std::optional<geometry::DepthAlignment> depth_alignment_;  // of the current frame, if aligned
+  int frames_posed_by_depth_ = 0;                            // in a row, up to the current frame
+  struct ChainMotion {
+    double translation_m = 0.0;
+    double rotation_rad = 0.0;
+  };
+  ChainMotion depth_chain_motion_;            // summed over those frames
   std::optional<CentrePrior> tracked_prior_;  // the current frame's MotionPrior, if it had one
   std::deque<PoseUncertainty> recent_uncertainty_;  // of the last tracked frames, oldest first
   std::vector<KeyFrame*> local_keyframes_;
