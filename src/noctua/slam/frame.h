@@ -1,6 +1,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <memory>
 #include <opencv2/core.hpp>
 #include <vector>
@@ -114,6 +115,11 @@ struct Frame {
         moving(static_cast<std::size_t>(features->size()), false) {}
 
   int size() const { return features->size(); }
+  // Drops every match (and its outlier flag).
+  void ClearMatches() {
+    std::fill(map_points.begin(), map_points.end(), nullptr);
+    std::fill(outlier.begin(), outlier.end(), false);
+  }
   // World position of keypoint i lifted with its depth (requires depth and a pose).
   Eigen::Vector3d Unproject(int i) const;
   Eigen::Vector3d CameraCentre() const { return pose_cw.inverse().translation(); }

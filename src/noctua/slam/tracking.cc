@@ -153,15 +153,13 @@ TrackResult Tracker::Track(Frame frame) {
       if (!ok) {
         // Not found near the aligned pose, the map may still be found anywhere, as after a loss:
         // where people fill the view, the depth follows them.
-        std::fill(current_->map_points.begin(), current_->map_points.end(), nullptr);
-        std::fill(current_->outlier.begin(), current_->outlier.end(), false);
+        current_->ClearMatches();
         ok = Relocalise() && TrackLocalMap();
         if (ok) result.method = "relocalisation";
       }
       if (!ok) {
         current_->pose_cw = aligned;
-        std::fill(current_->map_points.begin(), current_->map_points.end(), nullptr);
-        std::fill(current_->outlier.begin(), current_->outlier.end(), false);
+        current_->ClearMatches();
         ok = depth_only = true;
       }
     }
@@ -320,8 +318,7 @@ bool Tracker::TrackByDepth() {
   depth_alignment_ = depth_aligner_->Align(last_->depth_m, current_->depth_m,
                                            velocity_.value_or(geometry::Pose::Identity()));
   if (!depth_alignment_) return false;
-  std::fill(current_->map_points.begin(), current_->map_points.end(), nullptr);
-  std::fill(current_->outlier.begin(), current_->outlier.end(), false);
+  current_->ClearMatches();
   current_->pose_cw = depth_alignment_->current_from_reference * last_->pose_cw;
   return true;
 }
@@ -1024,15 +1021,14 @@ int Tracker::FeaturesAgreeingWithDepth() {
   Frame& frame = *current_;
   const geometry::Pose aligned = frame.pose_cw;
   UpdateLastFrame();
-  std::fill(frame.map_points.begin(), frame.map_points.end(), nullptr);
+  frame.ClearMatches();
   matcher_.SearchByProjection(frame, *last_, kMotionModelRadiusPx);
   RejectMovingMatches(false);
   OptimizePose(frame, pyramid_, options_.bf);
   const int agreeing = DiscardOutliers() + odometry_inliers_;
   // The pose stays the depth's, and the frame has no match to the map.
   frame.pose_cw = aligned;
-  std::fill(frame.map_points.begin(), frame.map_points.end(), nullptr);
-  std::fill(frame.outlier.begin(), frame.outlier.end(), false);
+  frame.ClearMatches();
   return agreeing;
 }
 

@@ -28,7 +28,7 @@ enum class TrackingState {
   // SlamOptions::max_coasting_frames in a row), with a confidence that says how little it is
   // worth, and relocalisation tried on every such frame; or (method "depth",
   // SlamOptions::depth_fallback) the pose that aligning its depth with the frame before gives,
-  // the map searched again from there on the next frame.
+  // where neither the local map searched from it nor relocalisation found the map.
   kCoasting,
   kLost,
 };
@@ -180,8 +180,9 @@ class Tracker {
   // camera, once the map's points have not been found again for longer than a coasted pose is
   // trusted (SlamOptions::max_coasting_frames), and only where the frame's own features agree
   // with the depth's motion (FeaturesAgreeingWithDepth, at least min_tracked_inliers). Until then
-  // the map is searched again at each new pose: a short stretch rejoins the map it left. Where
-  // people fill the view the depth follows them, and the static features disagree.
+  // the map is searched again at each new pose: a short stretch rejoins the map it left. (The
+  // check is on the last step only: where people fill the view and the depth has followed them
+  // for several frames, consecutive frames still agree; docs/slam.md.)
   bool DepthPoseShouldAnchorKeyFrame();
   // The last frame's points (the map's, and those its depth lifts) that the current frame finds
   // by projection from its depth pose and that stay inliers when the pose is fitted to them; the
