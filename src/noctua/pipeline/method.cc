@@ -263,6 +263,7 @@ void UsedMasks::Keep() {
 
 void UsedMasks::Add(const cv::Mat& mask) {
   const std::lock_guard<std::mutex> lock(mutex_);
+  latest_ = mask;
   if (!keep_) return;
   if (masks_.size() == kMaxKept) masks_.pop_front();
   masks_.push_back(mask);
@@ -273,6 +274,13 @@ cv::Mat UsedMasks::Take() {
   if (masks_.empty()) return {};
   cv::Mat mask = masks_.front();
   masks_.pop_front();
+  return mask;
+}
+
+cv::Mat UsedMasks::TakeLatest() {
+  const std::lock_guard<std::mutex> lock(mutex_);
+  cv::Mat mask = std::move(latest_);
+  latest_ = cv::Mat();
   return mask;
 }
 

@@ -41,7 +41,8 @@ struct MethodConfig {
 
 // The dynamic masks a method's extraction used, in extraction order, for a viewer that draws them
 // with the frame they belong to. Nothing is kept until Keep() is called, so a run without a viewer
-// holds no masks; at most kMaxKept are kept (the oldest go first).
+// holds no masks; at most kMaxKept are kept (the oldest go first). The latest mask is held apart
+// for the SLAM's depth (slam::RgbdSlam::SetDynamicRegions).
 class UsedMasks {
  public:
   static constexpr std::size_t kMaxKept = 32;
@@ -49,10 +50,14 @@ class UsedMasks {
   void Add(const cv::Mat& mask);  // called by the extraction
   // The oldest kept mask, taken out; empty when there is none (e.g. no detector).
   cv::Mat Take();
+  // The mask of the latest extraction, taken out: empty when none came since the last call, so a
+  // frame never gets an older frame's regions.
+  cv::Mat TakeLatest();
 
  private:
   std::mutex mutex_;
   std::deque<cv::Mat> masks_;
+  cv::Mat latest_;
   bool keep_ = false;
 };
 

@@ -300,14 +300,19 @@ TEST(CreateMethod, EveryMethodTakesTheDetectorsDynamicRegions) {
     EXPECT_EQ(inside(with.keypoints), 0);
     EXPECT_GT(with.keypoints.size(), 50u);
     EXPECT_EQ(with.descriptors.rows, static_cast<int>(with.keypoints.size()));
-    // The same through the method's plain cv::Feature2D, the way the SLAM calls it.
+    // The same through the method's plain cv::Feature2D, the way the SLAM calls it; the regions
+    // it left out are then the SLAM's to take, once (slam::RgbdSlam::SetDynamicRegions).
     std::vector<cv::KeyPoint> points;
     cv::Mat descriptors;
-    CreateMethod(name, config)
-        ->feature2d()
-        ->detectAndCompute(frame, cv::noArray(), points, descriptors);
+    const auto plain = CreateMethod(name, config);
+    EXPECT_TRUE(plain->used_masks()->TakeLatest().empty());
+    plain->feature2d()->detectAndCompute(frame, cv::noArray(), points, descriptors);
     EXPECT_EQ(inside(points), 0);
     EXPECT_EQ(points.size(), with.keypoints.size());
+    const cv::Mat taken = plain->used_masks()->TakeLatest();
+    ASSERT_EQ(taken.size(), dynamic.size());
+    EXPECT_EQ(cv::countNonZero(taken != dynamic), 0);
+    EXPECT_TRUE(plain->used_masks()->TakeLatest().empty());
 
     MethodConfig ahead = config;
     ahead.detect_ahead = true;

@@ -57,10 +57,7 @@ RgbdSlam::Extracted RgbdSlam::Extract(const cv::Mat& image, const cv::Mat& depth
   }
   extracted.features = std::make_shared<const FrameFeatures>(
       std::move(keypoints), descriptors, depth, camera_, options_.bf, options_.min_depth_m);
-  // Kept for SlamOptions::depth_fallback only, as the frame's own copy: a caller may reuse its
-  // buffer for the next frame, and the depth is compared with the next frame's.
-  if (options_.depth_fallback)
-    extracted.depth_m = depth.data == depth_m.data ? depth.clone() : depth;
+  if (options_.depth_fallback) extracted.depth_m = StaticDepth(depth, depth.data != depth_m.data);
   extracted.timestamp = timestamp;
   extracted.extract_ms = watch.ElapsedMs();
   if (segmenter_ != nullptr) {
@@ -69,6 +66,22 @@ RgbdSlam::Extracted RgbdSlam::Extract(const cv::Mat& image, const cv::Mat& depth
     extracted.moving_ms = watch.ElapsedMs();
   }
   return extracted;
+}
+
+cv::Mat RgbdSlam::StaticDepth(const cv::Mat& depth_m, bool own_copy) const {
+  // The frame's own copy: a caller may reuse its buffer for the next frame, and the depth is
+  // compared with the next frame's.
+  cv::Mat depth = own_copy ? depth_m : depth_m.clone();
+  const cv::Mat regions = dynamic_regions_ ? dynamic_regions_() : cv::Mat();
+  if (regions.empty()) return depth;
+  if (regions.type() != CV_8UC1 || regions.size() != depth.size()) {
+    throw Error(
+        "slam: the dynamic regions of an extraction must be CV_8U of the image's size, not " +
+        std::to_string(regions.cols) + "x" + std::to_string(regions.rows) + " of type " +
+        std::to_string(regions.type()));
+  }
+  depth.setTo(0.0f, regions);
+  return depth;
 }
 
 TrackResult RgbdSlam::Track(Extracted extracted, bool advance_mapping) {

@@ -35,8 +35,8 @@ class RgbdSlam {
   // touches no tracking state, so the result does not depend on how the two overlap.
   struct Extracted {
     std::shared_ptr<const FrameFeatures> features;
-    // As the features read it (SlamOptions::max_depth_m applied); only with
-    // SlamOptions::depth_fallback.
+    // As the features read it (SlamOptions::max_depth_m applied), none in the extraction's
+    // dynamic regions (SetDynamicRegions); only with SlamOptions::depth_fallback.
     cv::Mat depth_m;
     double timestamp = 0.0;
     double extract_ms = 0.0;
@@ -78,10 +78,23 @@ class RgbdSlam {
     return tracker_.AdjustWholeMap(iterations, min_points);
   }
   const Tracker& tracker() const { return tracker_; }
+  // Where the extractor leaves dynamic regions out (people), the depth must too: a person who
+  // fills the view drags an alignment of whole depth images along (SlamOptions::depth_fallback).
+  // `regions` is called once after each extraction and returns the regions that extraction left
+  // out (CV_8U of the image's size, non-zero = dynamic; empty: none), e.g.
+  // pipeline::UsedMasks::TakeLatest. The depth kept for the fallback reads none there.
+  using DynamicRegionsOfExtraction = std::function<cv::Mat()>;
+  void SetDynamicRegions(DynamicRegionsOfExtraction regions) {
+    dynamic_regions_ = std::move(regions);
+  }
   // Starts from a saved map (Tracker::UseMap); before the first frame.
   void UseMap(Map map, bool localize) { tracker_.UseMap(std::move(map), localize); }
 
  private:
+  // The depth kept for SlamOptions::depth_fallback: the frame's own (`own_copy`: depth_m is
+  // already a copy), none in the dynamic regions of the extraction just done.
+  cv::Mat StaticDepth(const cv::Mat& depth_m, bool own_copy) const;
+
   geometry::PinholeCamera camera_;
   cv::Ptr<cv::Feature2D> extractor_;
   SlamOptions options_;
@@ -92,6 +105,7 @@ class RgbdSlam {
   // Averages dark frames along the camera's motion before extraction (on the extraction's side
   // too: it looks back at earlier frames only, in frame order).
   std::unique_ptr<TemporalDenoiser> denoiser_;
+  DynamicRegionsOfExtraction dynamic_regions_;
   long next_frame_id_ = 0;
 };
 

@@ -129,12 +129,13 @@ struct SlamOptions {
   // A frame whose features cannot be tracked right after a tracked one (a dark frame smeared by
   // a fast turn) takes its motion from the last frame's depth image to its own
   // (geometry::DepthAligner), where the depth fixes all six degrees of freedom, and the map is
-  // searched again from there. Not found again, the frame is reported and bridged as coasted;
-  // after max_coasting_frames such frames in a row it becomes a keyframe where its own features
-  // agree with that motion, so that the map follows the camera instead of losing it for good once
-  // it turns beyond what the map has seen
-  // (docs/slam.md, "Depth when the features fail"). Off by default: where people fill the view,
-  // the depth follows them (the dark crowd ends 1.7-4.8 times worse on three camera models).
+  // searched again from there. The extraction's dynamic regions (RgbdSlam::SetDynamicRegions:
+  // people) are left out of the depth. Not found again, the frame is reported and bridged as
+  // coasted; after max_coasting_frames such frames in a row it becomes a keyframe where the map
+  // has left the view or is in plain view yet not recognised (not hidden behind people), and
+  // where its own features agree with that motion: so that the map follows the camera instead of
+  // losing it for good once it turns beyond what the map has seen (docs/slam.md, "Depth when the
+  // features fail"). Off by default until measured on the dark crowd.
   bool depth_fallback = false;
   double certain_sigma_ratio = 2.0;
   // Root-mean-square acceleration of the camera, m/s²; 0 turns the motion prior off.

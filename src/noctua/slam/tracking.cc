@@ -7,6 +7,7 @@
 #include <opencv2/core/eigen.hpp>
 #include <set>
 
+#include "noctua/geometry/depth_alignment.h"
 #include "noctua/slam/optimizer.h"
 #include "noctua/util/error.h"
 #include "noctua/util/timer.h"
@@ -20,6 +21,34 @@ namespace {
 // about 17 px at 30 Hz with fr1's focal length.
 constexpr double kMotionModelRadiusPx = 15.0;
 constexpr double kStillRadiusPx = 30.0;
+
+// A map point is in a frame's view when seen at most 60 degrees off the mean direction it was
+// seen from (ORB-SLAM's frustum test), beyond which its descriptor no longer matches.
+constexpr double kInViewCos = 0.5;
+
+// Half the side of the window in which a map point in view looks for its surface in the depth.
+constexpr int kSurfaceWindowPx = 4;
+
+// Whether some reading of `depth_m` within kSurfaceWindowPx of `pixel` (as detected) lies on the
+// surface of a point `depth` away: one pair distance of the depth aligner or less. A corner's
+// point has its own surface on one side of the depth edge it is on, and a pose chained from depth
+// alignments is a few pixels off. Elsewhere no reading (a dynamic region,
+// RgbdSlam::SetDynamicRegions) or nearer ones (something in front that no detector marked) hide
+// the point.
+bool DepthReadsSurfaceNear(const cv::Mat& depth_m, const Eigen::Vector2d& pixel, double depth) {
+  static const double same_surface_m = geometry::DepthAlignmentOptions{}.max_pair_distance_m;
+  const int u = static_cast<int>(std::lround(pixel.x()));
+  const int v = static_cast<int>(std::lround(pixel.y()));
+  for (int y = std::max(0, v - kSurfaceWindowPx);
+       y <= std::min(depth_m.rows - 1, v + kSurfaceWindowPx); ++y) {
+    const float* row = depth_m.ptr<float>(y);
+    for (int x = std::max(0, u - kSurfaceWindowPx);
+         x <= std::min(depth_m.cols - 1, u + kSurfaceWindowPx); ++x) {
+      if (row[x] > 0.0f && std::abs(row[x] - depth) < same_surface_m) return true;
+    }
+  }
+  return false;
+}
 
 // Ids of temporary points, which live for one frame: the last frame's depth points (visual
 // odometry), and, localising, the reference keyframe's depth points, which count as the map's.
@@ -736,24 +765,34 @@ bool Tracker::RelocaliseWith(KeyFrame* keyframe, const std::vector<MapPoint*>& m
   return true;
 }
 
+std::optional<Tracker::PointView> Tracker::ViewFromCurrent(const MapPoint& point,
+                                                           double min_view_cos) const {
+  const Frame& frame = *current_;
+  PointView view;
+  view.in_camera = frame.pose_cw * point.position();
+  if (view.in_camera.z() <= 0.0) return std::nullopt;
+  view.pixel = frame.features->camera().Project(view.in_camera);
+  if (!frame.features->InBounds(view.pixel.x(), view.pixel.y())) return std::nullopt;
+  const Eigen::Vector3d ray = point.position() - frame.CameraCentre();
+  view.distance = ray.norm();
+  if (view.distance < point.min_distance() || view.distance > point.max_distance()) {
+    return std::nullopt;
+  }
+  view.view_cos = ray.dot(point.normal()) / view.distance;
+  if (view.view_cos < min_view_cos) return std::nullopt;
+  return view;
+}
+
 bool Tracker::InFrustum(MapPoint* point, double min_view_cos) const {
   point->track_in_view = false;
-  const Frame& frame = *current_;
-  const Eigen::Vector3d in_camera = frame.pose_cw * point->position();
-  if (in_camera.z() <= 0.0) return false;
-  const Eigen::Vector2d pixel = frame.features->camera().Project(in_camera);
-  if (!frame.features->InBounds(pixel.x(), pixel.y())) return false;
-  const Eigen::Vector3d ray = point->position() - frame.CameraCentre();
-  const double distance = ray.norm();
-  if (distance < point->min_distance() || distance > point->max_distance()) return false;
-  const double view_cos = ray.dot(point->normal()) / distance;
-  if (view_cos < min_view_cos) return false;
+  const std::optional<PointView> view = ViewFromCurrent(*point, min_view_cos);
+  if (!view) return false;
   point->track_in_view = true;
-  point->track_x = pixel.x();
-  point->track_y = pixel.y();
-  point->track_right_x = pixel.x() - options_.bf / in_camera.z();
-  point->track_level = point->PredictScale(distance, pyramid_);
-  point->track_view_cos = view_cos;
+  point->track_x = view->pixel.x();
+  point->track_y = view->pixel.y();
+  point->track_right_x = view->pixel.x() - options_.bf / view->in_camera.z();
+  point->track_level = point->PredictScale(view->distance, pyramid_);
+  point->track_view_cos = view->view_cos;
   return true;
 }
 
@@ -839,7 +878,7 @@ void Tracker::SearchLocalPoints() {
   int to_match = 0;
   for (MapPoint* point : local_points_) {
     if (point->last_frame_seen == frame.id || point->bad()) continue;
-    if (InFrustum(point, 0.5)) {
+    if (InFrustum(point, kInViewCos)) {
       point->IncreaseVisible();
       ++to_match;
     }
@@ -1013,8 +1052,25 @@ bool Tracker::NeedNewKeyFrame() const {
 }
 
 bool Tracker::DepthPoseShouldAnchorKeyFrame() {
-  return frames_posed_by_depth_ > options_.max_coasting_frames &&
+  return frames_posed_by_depth_ > options_.max_coasting_frames && !MapHidden() &&
          FeaturesAgreeingWithDepth() >= options_.min_tracked_inliers;
+}
+
+bool Tracker::MapHidden() const {
+  const Frame& frame = *current_;
+  const geometry::PinholeCamera& camera = frame.features->camera();
+  int in_view = 0;
+  int hidden = 0;
+  for (const MapPoint* point : local_points_) {
+    if (point->bad()) continue;
+    const std::optional<PointView> view = ViewFromCurrent(*point, kInViewCos);
+    if (!view) continue;
+    ++in_view;
+    if (!DepthReadsSurfaceNear(frame.depth_m, camera.Distort(view->pixel), view->in_camera.z())) {
+      ++hidden;
+    }
+  }
+  return in_view >= options_.min_tracked_inliers && 2 * hidden > in_view;
 }
 
 int Tracker::FeaturesAgreeingWithDepth() {
