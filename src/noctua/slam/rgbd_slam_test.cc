@@ -497,6 +497,7 @@ TEST_F(RgbdSlamTest, TriangulatesWhereDepthIsMissingAndTracksEveryFrame) {
   for (const bool triangulate : {true, false}) {
     SlamOptions options = setup_->options;
     options.triangulation.enabled = triangulate;
+    options.depth_fallback = false;  // which would pose the frames the features lose
     options.motion_prior_acceleration_mps2 = 0.0;
     options.rolling_shutter_s = 0.0;
     RgbdSlam slam(setup_->camera.Camera(), Orb(*setup_), options);
@@ -832,10 +833,12 @@ TEST_F(RgbdSlamTest, ForgetsTheFirstKeyFramesPointsInALateDynamicRegion) {
 // Twenty black frames: the first max_coasting_frames (10) get the motion model's pose, marked
 // as coasting with a confidence that worsens frame by frame; the rest have no pose; the first
 // frame after the stretch relocalises. (The trajectory unsmoothed, so that the bridged poses are
-// exactly the interpolation.)
+// exactly the interpolation; without the depth fallback, which poses all twenty by their depth:
+// PosesBlackFramesByTheirDepth.)
 TEST_F(RgbdSlamTest, RecoversAfterTwentyBlackFrames) {
   SlamOptions unsmoothed = setup_->options;
   unsmoothed.smooth_trajectory = false;
+  unsmoothed.depth_fallback = false;
   const auto black = [](int index, const cv::Mat& image) {
     return index >= 40 && index < 60 ? cv::Mat(image.size(), image.type(), cv::Scalar::all(0))
                                      : image;
@@ -1112,11 +1115,13 @@ TEST_F(RgbdSlamTest, BridgesCoastedFramesBetweenTheTrackedFramesAroundThem) {
 
 // After the black stretch the map grows again at once by default; with ORB-SLAM's pause no
 // keyframe is made for that many frames after the relocalisation (once the map has more than
-// max_frames_between_keyframes keyframes, here made small so that it has).
+// max_frames_between_keyframes keyframes, here made small so that it has). Without the depth
+// fallback, so that the black frames are lost and the first after them relocalises.
 TEST_F(RgbdSlamTest, KeyFramesResumeRightAfterARelocalisationUnlessPaused) {
   for (const int pause : {0, 20}) {
     SCOPED_TRACE(pause);
     SlamOptions options = setup_->options;
+    options.depth_fallback = false;
     options.max_frames_between_keyframes = 5;
     options.keyframe_pause_after_relocalisation = pause;
     RunOptions run_options;
@@ -1152,15 +1157,16 @@ TEST_F(RgbdSlamTest, KeyFramesResumeRightAfterARelocalisationUnlessPaused) {
 }
 
 // Relocalisation through the place-recognition vocabulary (the shipped one) and without one
-// (every keyframe matched): after 20 black frames both resume at frame 60 with a sound pose;
-// with the vocabulary the keyframe database holds exactly the map's good keyframes, and the
-// map's identity names the vocabulary.
+// (every keyframe matched): after 20 black frames (lost: no depth fallback) both resume at frame
+// 60 with a sound pose; with the vocabulary the keyframe database holds exactly the map's good
+// keyframes, and the map's identity names the vocabulary.
 TEST_F(RgbdSlamTest, RelocalisesWithAndWithoutTheVocabulary) {
   const std::filesystem::path shipped =
       std::filesystem::path(NOCTUA_SOURCE_DIR) / "data" / "vocabulary" / "default.vocab";
   for (const std::string& vocabulary : {shipped.string(), std::string("none")}) {
     SCOPED_TRACE(vocabulary);
     SlamOptions options = setup_->options;
+    options.depth_fallback = false;
     options.vocabulary = vocabulary;
     RgbdSlam slam(setup_->camera.Camera(), Orb(*setup_), options);
     RunOptions run_options;
@@ -1311,15 +1317,15 @@ TEST_F(RgbdSlamTest, BadConfigAndBadDataFailClearly) {
   EXPECT_THAT(error_of([&] { LoadSlamSetup(write(camera + "slam:\n  min_initial_points: 5\n")); }),
               HasSubstr("min_initial_points must be at least 10"));
   EXPECT_TRUE(defaults.bridge_coasted_frames);
-  EXPECT_FALSE(defaults.depth_fallback);
+  EXPECT_TRUE(defaults.depth_fallback);
   const SlamOptions coasting =
       LoadSlamSetup(write(camera +
                           "slam:\n  max_coasting_frames: 4\n  bridge_coasted_frames: false\n"
-                          "  depth_fallback: true\n"))
+                          "  depth_fallback: false\n"))
           .options;
   EXPECT_EQ(coasting.max_coasting_frames, 4);
   EXPECT_FALSE(coasting.bridge_coasted_frames);
-  EXPECT_TRUE(coasting.depth_fallback);
+  EXPECT_FALSE(coasting.depth_fallback);
   EXPECT_THAT(
       error_of([&] { LoadSlamSetup(write(camera + "slam:\n  max_coasting_frames: -1\n")); }),
       HasSubstr("max_coasting_frames must not be negative"));
@@ -1379,12 +1385,14 @@ TEST_F(RgbdSlamTest, BadConfigAndBadDataFailClearly) {
 // boxes leave no static pixel. With YOLOv8n detecting ahead (every 3rd frame) and each box cut to
 // its person's depth segment, `orb` keeps every one of the first 60 frames (measured ATE 0.016 m
 // against the camera poses of the Bonn convention; bound 0.05 m, loose because one run scatters);
-// with whole boxes, frames are lost there.
+// with whole boxes, frames are lost there. (Without the depth fallback, which would pose those
+// frames by the depth left beside the boxes.)
 TEST(RgbdSlamCrowd, KeepsEveryFrameOfTheBonnCrowdWithDepthCutDetections) {
   const io::CameraConfig camera = io::ReadCameraConfig(kConfigDir / "bonn.yaml");
   const io::Sequence sequence = io::Sequence::Open(
       testing::DataDir() / "bonn_crowd_120", {.ground_truth_convention = camera.ground_truth});
-  const SlamSetup setup = LoadSlamSetup(kConfigDir / "bonn.yaml");
+  SlamSetup setup = LoadSlamSetup(kConfigDir / "bonn.yaml");
+  setup.options.depth_fallback = false;
   const auto run = [&](bool depth_segment) {
     pipeline::MethodConfig config;
     config.extractor = features::LoadExtractorOptions(kConfigDir / "bonn.yaml");
