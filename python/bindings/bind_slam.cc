@@ -28,7 +28,7 @@ class Slam {
                                                setup_.options)) {
     // Frames may come from a live camera: the first should not pay the extractor's set-up.
     method_->Prepare(setup_.camera.Camera().size());
-    slam_->SetDynamicRegions([masks = method_->used_masks()] { return masks->TakeLatest(); });
+    slam_->SetDynamicRegions(method_->latest_dynamic_regions());
   }
 
   py::object Track(const py::object& image, const py::object& depth, double timestamp) {

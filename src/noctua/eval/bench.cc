@@ -172,7 +172,7 @@ void TimeSlam(BenchContext& context, const slam::SlamSetup& setup, int rep) {
   auto extractor =
       pipeline::CreateMethod("paper", detector ? context.detector_config : context.config);
   slam::RgbdSlam slam(setup.camera.Camera(), extractor->feature2d(), setup.options);
-  slam.SetDynamicRegions([masks = extractor->used_masks()] { return masks->TakeLatest(); });
+  slam.SetDynamicRegions(extractor->latest_dynamic_regions());
   BenchTable& table = context.result.table;
   for (std::size_t f = 0; f < context.frames.size(); ++f) {
     const BenchFrame& frame = context.frames[f];

@@ -305,7 +305,7 @@ SlamRunReport SlamRunner::Run(const SlamProgress& progress, const std::function<
   }
   method_->Prepare(setup_.camera.Camera().size());
   slam::RgbdSlam slam(setup_.camera.Camera(), method_->feature2d(), setup_.options);
-  slam.SetDynamicRegions([masks = method_->used_masks()] { return masks->TakeLatest(); });
+  slam.SetDynamicRegions(method_->latest_dynamic_regions());
   if (!options_.load_map.empty()) {
     if (!loaded_map_) loaded_map_ = slam::LoadMap(options_.load_map, RunMapIdentity());
     slam.UseMap(std::move(*loaded_map_), options_.localize);

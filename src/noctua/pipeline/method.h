@@ -1,6 +1,7 @@
 #pragma once
 
 #include <deque>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <opencv2/features2d.hpp>
@@ -93,6 +94,11 @@ class FeatureMethod {
 
   // The dynamic masks the extraction used (see UsedMasks); never null.
   std::shared_ptr<UsedMasks> used_masks() const { return used_masks_; }
+  // The regions the latest extraction left out, taken out on each call (UsedMasks::TakeLatest):
+  // what slam::RgbdSlam::SetDynamicRegions asks for. Holds the masks, not the method.
+  std::function<cv::Mat()> latest_dynamic_regions() const {
+    return [masks = used_masks_] { return masks->TakeLatest(); };
+  }
 
  protected:
   FeatureMethod(std::string name, std::shared_ptr<UsedMasks> used_masks)

@@ -305,13 +305,15 @@ TEST(CreateMethod, EveryMethodTakesTheDetectorsDynamicRegions) {
     std::vector<cv::KeyPoint> points;
     cv::Mat descriptors;
     const auto plain = CreateMethod(name, config);
-    EXPECT_TRUE(plain->used_masks()->TakeLatest().empty());
+    const auto latest_regions = plain->latest_dynamic_regions();
+    EXPECT_TRUE(latest_regions().empty());
     plain->feature2d()->detectAndCompute(frame, cv::noArray(), points, descriptors);
     EXPECT_EQ(inside(points), 0);
     EXPECT_EQ(points.size(), with.keypoints.size());
-    const cv::Mat taken = plain->used_masks()->TakeLatest();
+    const cv::Mat taken = latest_regions();
     ASSERT_EQ(taken.size(), dynamic.size());
     EXPECT_EQ(cv::countNonZero(taken != dynamic), 0);
+    EXPECT_TRUE(latest_regions().empty());
     EXPECT_TRUE(plain->used_masks()->TakeLatest().empty());
 
     MethodConfig ahead = config;
