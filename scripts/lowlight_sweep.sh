@@ -99,7 +99,11 @@ slam_one() {
 
 eval_one() {
   local sensor=$1 level=$2 seed=$3 dir=$out/eval/${1}_${2}_s$3 data
-  [ -e "$dir/summary.json" ] && return 0
+  # Reused only when it holds every method asked for now: an OUT run again with more methods
+  # evaluates its cases again instead of reporting the new methods as matching nothing.
+  [ -e "$dir/summary.json" ] && jq -e --arg m "$methods" \
+    '($m | split(" ") | map(select(. != ""))) - [.methods[].method] | length == 0' \
+    "$dir/summary.json" >/dev/null && return 0
   # The recorded frames are the same for every seed: evaluate them once.
   [ "$level" = 100 ] && [ "$seed" != "$first_seed" ] && return 0
   data=$out/seq/${sensor}_${level}_s$seed
@@ -130,6 +134,10 @@ while read -r sensor level seed; do
       .methods[] | select(.method == $m) | .mean_correct[$i]' "$summary")
     repeated=$(jq -r --arg m "$method" '(.taus | index(3)) as $i |
       .methods[] | select(.method == $m) | .repeatability[$i]' "$summary")
+    if [ -z "$correct" ] || [ -z "$repeated" ]; then
+      echo "lowlight_sweep: $summary: no $method in it" >&2
+      exit 1
+    fi
     jq -r --arg s "$sensor" --arg l "$level" --arg k "$seed" --arg m "$method" --arg c "$correct" \
       --arg r "$repeated" \
       '[$s, $l, $k, $m, (.ate.translation_m.rmse // "nan"), .frames - .tracked_frames, .frames, $c,
